@@ -1,0 +1,59 @@
+"""The root ``swarmtag`` group and the error boundary of the command line."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+import click
+
+from swarmtag import __version__
+from swarmtag.cli.demo import demo
+from swarmtag.cli.tag import tag
+from swarmtag.errors import SwarmtagError
+
+__all__ = ["EXIT_BAD_INPUT", "app", "main"]
+
+EXIT_BAD_INPUT = 2
+"""Exit status for every refused input, ours or the CLI framework's."""
+
+
+@click.group(
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+)
+@click.version_option(__version__, prog_name="swarmtag")
+def app() -> None:
+    """Urgency-aware robot-swarm intralogistics: tags, policies, simulation, metrics."""
+
+
+app.add_command(tag)
+app.add_command(demo)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(part.strip() for part in text.splitlines() if part.strip())
+
+
+def _fail(message: str, status: int) -> None:
+    click.echo(f"swarmtag: error: {_one_line(message)}", err=True)
+    sys.exit(status)
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Run the command line; exit 0 on success, 2 with one line on stderr on bad input."""
+    try:
+        result = app.main(args=argv, prog_name="swarmtag", standalone_mode=False)
+    except click.exceptions.NoArgsIsHelpError as error:
+        # A bare group prints its help, as a user asking "what is here?" expects.
+        click.echo(error.ctx.get_help() if error.ctx else error.format_message())
+        sys.exit(0)
+    except click.UsageError as error:
+        hint = f" (see '{error.ctx.command_path} --help')" if error.ctx else ""
+        _fail(error.format_message() + hint, EXIT_BAD_INPUT)
+    except click.ClickException as error:
+        _fail(error.format_message(), EXIT_BAD_INPUT)
+    except click.Abort:
+        _fail("aborted", 130)
+    except SwarmtagError as error:
+        _fail(str(error), EXIT_BAD_INPUT)
+    sys.exit(result if isinstance(result, int) else 0)

@@ -1,0 +1,77 @@
+"""``swarmtag tag encode|decode``: the advertisement payload from the shell (SPEC §8.2)."""
+
+from __future__ import annotations
+
+import json
+import string
+
+import click
+
+from swarmtag.errors import FieldRangeError, PayloadError
+from swarmtag.tag import COMPANY_ID, TagState, TagStatus, decode, encode
+
+__all__ = ["tag"]
+
+_SEPARATORS = str.maketrans("", "", ":- \t")
+
+
+def _status(_ctx: click.Context, _param: click.Parameter, value: str) -> TagStatus:
+    """Parse ``--status`` by name in any case (``awaiting_pickup``) or number (0-2)."""
+    try:
+        return TagStatus.parse(value)
+    except FieldRangeError as error:
+        raise click.BadParameter(str(error).removeprefix("status: ")) from None
+
+
+def parse_hex(text: str) -> bytes:
+    """Read hex with an optional ``0x`` prefix and ``:``/``-``/space separators."""
+    digits = text.strip().lower().removeprefix("0x").translate(_SEPARATORS)
+    if not digits or any(char not in string.hexdigits for char in digits) or len(digits) % 2:
+        raise PayloadError(f"{text!r} is not a hex byte string (expected e.g. ffff0701030c)")
+    return bytes.fromhex(digits)
+
+
+@click.group()
+def tag() -> None:
+    """Encode and decode the 6-byte tag advertisement payload."""
+
+
+@tag.command("encode")
+@click.option("--urgency", required=True, type=click.IntRange(0, 9), help="Urgency 0-9.")
+@click.option(
+    "--status",
+    required=True,
+    metavar="STATUS",
+    callback=_status,
+    help="idle, awaiting_pickup or picked_up (any case), or 0-2.",
+)
+@click.option(
+    "--destination", required=True, type=click.IntRange(0, 255), help="Destination 0-255."
+)
+@click.option("--marker", required=True, type=click.IntRange(0, 255), help="ArUco marker id 0-255.")
+def encode_cmd(urgency: int, status: TagStatus, destination: int, marker: int) -> None:
+    """Print the payload as lowercase hex, e.g. ffff0701030c."""
+    state = TagState(urgency=urgency, status=status, destination=destination, marker=marker)
+    click.echo(encode(state).hex())
+
+
+@tag.command("decode")
+@click.argument("hex_payload", metavar="HEX")
+@click.option("--json", "as_json", is_flag=True, help="Print the fields as one JSON object.")
+def decode_cmd(hex_payload: str, *, as_json: bool) -> None:
+    """Print the fields of a 6-byte payload given as HEX (e.g. ffff0701030c)."""
+    state = decode(parse_hex(hex_payload))
+    fields = {
+        "company_id": COMPANY_ID,
+        "urgency": state.urgency,
+        "status": state.status.name,
+        "destination": state.destination,
+        "marker": state.marker,
+    }
+    if as_json:
+        click.echo(json.dumps(fields))
+        return
+    width = max(map(len, fields))
+    for name, value in fields.items():
+        shown = f"0x{value:04x}" if name == "company_id" else value
+        click.echo(f"{name:<{width}}  {shown}")

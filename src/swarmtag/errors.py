@@ -1,0 +1,143 @@
+"""Every error swarmtag raises on purpose, in one tree.
+
+Catch ``SwarmtagError`` to handle anything the library refuses; catch a leaf
+to handle one cause. Each message says what was wrong and, where it helps,
+what to do instead.
+
+::
+
+    SwarmtagError
+    ├── FieldRangeError (ValueError)        a field value outside its allowed range
+    ├── PayloadError (ValueError)           an advertisement payload is not a valid tag payload
+    │   ├── PayloadLengthError              wrong number of bytes
+    │   ├── ForeignCompanyError             company id is not 0xFFFF ("not ours")
+    │   ├── UrgencyRangeError               urgency byte above 9
+    │   └── UnknownStatusError              status byte not 0, 1 or 2
+    ├── WriteRejected                       a tag refused an authenticated write
+    │   ├── MalformedWrite                  bad length, version, role, mask or padding
+    │   ├── ForgedWrite                     the MAC does not verify under the site key
+    │   ├── WrongTarget                     the write names another tag
+    │   ├── ReplayedWrite                   counter not above the writer's highest seen
+    │   ├── RoleNotAllowed                  that role may not change that field
+    │   └── IllegalTransition               that role may not make that status change
+    ├── StateRecordError (ValueError)       a persisted tag record is corrupt or unknown
+    ├── PolicyError (ValueError)            bad policy parameter, condition name or inputs
+    ├── EventLogError (ValueError)          an event log breaks the schema (names file, row, column)
+    └── StatisticsError (ValueError)        statistics input refused (no runs, unknown baseline)
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "EventLogError",
+    "FieldRangeError",
+    "ForeignCompanyError",
+    "ForgedWrite",
+    "IllegalTransition",
+    "MalformedWrite",
+    "PayloadError",
+    "PayloadLengthError",
+    "PolicyError",
+    "ReplayedWrite",
+    "RoleNotAllowed",
+    "StateRecordError",
+    "StatisticsError",
+    "SwarmtagError",
+    "UnknownStatusError",
+    "UrgencyRangeError",
+    "WriteRejected",
+    "WrongTarget",
+]
+
+
+class SwarmtagError(Exception):
+    """Base of every error swarmtag raises on purpose."""
+
+
+class FieldRangeError(SwarmtagError, ValueError):
+    """A field value lies outside its allowed range; the message names the field."""
+
+
+class PayloadError(SwarmtagError, ValueError):
+    """Bytes that are not a valid swarmtag advertisement payload."""
+
+
+class PayloadLengthError(PayloadError):
+    """The payload has the wrong number of bytes."""
+
+
+class ForeignCompanyError(PayloadError):
+    """The company identifier is not 0xFFFF: the advertisement is not ours."""
+
+
+class UrgencyRangeError(PayloadError):
+    """The urgency byte is above 9."""
+
+
+class UnknownStatusError(PayloadError):
+    """The status byte is not a known ``TagStatus``."""
+
+
+class WriteRejected(SwarmtagError):
+    """A tag refused a write and left its state exactly as it was.
+
+    ``att_error`` is the ATT error code a hardware tag answers with.
+    """
+
+    att_error: int = 0x80
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(reason)
+        self.reason = reason
+
+
+class MalformedWrite(WriteRejected):
+    """The write is not a well-formed swarmtag write (length, version, role, mask, padding)."""
+
+    att_error = 0x0D  # ATT "Invalid Attribute Value Length" / malformed value
+
+
+class ForgedWrite(WriteRejected):
+    """The MAC does not verify under the site key."""
+
+    att_error = 0x80
+
+
+class ReplayedWrite(WriteRejected):
+    """The counter is not above the highest counter seen from that writer."""
+
+    att_error = 0x81
+
+
+class WrongTarget(WriteRejected):
+    """The write is addressed to another tag (another marker id)."""
+
+    att_error = 0x82
+
+
+class RoleNotAllowed(WriteRejected):
+    """The writer's role may not change that field."""
+
+    att_error = 0x83
+
+
+class IllegalTransition(WriteRejected):
+    """The writer's role may not make that status transition."""
+
+    att_error = 0x84
+
+
+class StateRecordError(SwarmtagError, ValueError):
+    """A persisted tag state record is corrupt, truncated or of an unknown version."""
+
+
+class PolicyError(SwarmtagError, ValueError):
+    """A selection policy got a bad parameter, condition name or input arrays."""
+
+
+class EventLogError(SwarmtagError, ValueError):
+    """An event log breaks the schema; the message names the file, row and column."""
+
+
+class StatisticsError(SwarmtagError, ValueError):
+    """Metrics or statistics got input they cannot use (no runs, unknown baseline, bad option)."""

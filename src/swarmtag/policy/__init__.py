@@ -1,0 +1,40 @@
+"""Carrier-selection policies (SPEC §3.3): the one place the formulas live.
+
+A robot scores every available carrier it detects and fetches the best one:
+
+- ``Proximity()`` scores ``u_d = 9 * (1 - min(d / 3.6, 1))`` (nearest wins);
+- ``Urgency(alpha)`` scores ``u_c * (alpha + u_d)``;
+- ``Weighted(w)`` scores ``w * u_c + (1 - w) * u_d``.
+
+Exact ties go to the smaller distance, then the smaller marker id. The
+simulator calls ``select`` on ``(runs, robots, carriers)`` arrays; the
+behaviour tree calls ``choose`` on one robot's ``Candidate`` list. Policies
+round-trip through their canonical condition names with ``parse_policy``.
+
+>>> parse_policy("urgency:alpha=0.7")
+Urgency(alpha=0.7)
+>>> int(select(Proximity(), urgency=[9, 0], distance=[2.0, 1.0], marker=[3, 4]))
+1
+"""
+
+from __future__ import annotations
+
+from swarmtag.policy._choose import Candidate, choose
+from swarmtag.policy._names import parse_policy
+from swarmtag.policy._policies import Policy, Proximity, Urgency, Weighted
+from swarmtag.policy._select import select
+from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE, proximity_term
+
+__all__ = [
+    "PROXIMITY_RANGE",
+    "URGENCY_SCALE",
+    "Candidate",
+    "Policy",
+    "Proximity",
+    "Urgency",
+    "Weighted",
+    "choose",
+    "parse_policy",
+    "proximity_term",
+    "select",
+]

@@ -1,0 +1,69 @@
+"""The smart tag: advertisement codec, lifecycle, authenticated writes, persistence.
+
+Everything here is pure (no radio, no clock); transports that move these
+bytes over real BLE live in adapters built on top.
+"""
+
+from __future__ import annotations
+
+from swarmtag.tag.codec import (
+    COMPANY_ID,
+    FIELD_LENGTH,
+    MAX_URGENCY,
+    PAYLOAD_LENGTH,
+    TagState,
+    decode,
+    decode_manufacturer_data,
+    encode,
+    encode_manufacturer_data,
+)
+from swarmtag.tag.filestore import FileStore
+from swarmtag.tag.gatt import ATT_ERRORS, SERVICE_UUID, STATE_CHAR_UUID, WRITE_CHAR_UUID
+from swarmtag.tag.lifecycle import ROBOT_TRANSITIONS, Change, Role, apply_change
+from swarmtag.tag.model import MemoryStore, TagModel, TagStore
+from swarmtag.tag.record import TagRecord
+from swarmtag.tag.scan import ScanFilter
+from swarmtag.tag.status import TagStatus
+from swarmtag.tag.write import (
+    MAC_LENGTH,
+    WRITE_LENGTH,
+    WRITE_VERSION,
+    Write,
+    WriteSigner,
+    sign,
+    verify,
+)
+
+__all__ = [
+    "ATT_ERRORS",
+    "COMPANY_ID",
+    "FIELD_LENGTH",
+    "MAC_LENGTH",
+    "MAX_URGENCY",
+    "PAYLOAD_LENGTH",
+    "ROBOT_TRANSITIONS",
+    "SERVICE_UUID",
+    "STATE_CHAR_UUID",
+    "WRITE_CHAR_UUID",
+    "WRITE_LENGTH",
+    "WRITE_VERSION",
+    "Change",
+    "FileStore",
+    "MemoryStore",
+    "Role",
+    "ScanFilter",
+    "TagModel",
+    "TagRecord",
+    "TagState",
+    "TagStatus",
+    "TagStore",
+    "Write",
+    "WriteSigner",
+    "apply_change",
+    "decode",
+    "decode_manufacturer_data",
+    "encode",
+    "encode_manufacturer_data",
+    "sign",
+    "verify",
+]

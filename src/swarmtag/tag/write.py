@@ -1,0 +1,210 @@
+"""Authenticated tag writes (SPEC §2.3): the 20-byte format, signing and verifying.
+
+Layout (multi-byte integers little-endian, as everywhere in BLE)::
+
+    byte  0      format version (0x01)
+    byte  1      flags: bits 0-1 role (1 robot, 2 operator),
+                 bit 4 urgency present, bit 5 status present, bit 6 destination present;
+                 bits 2, 3 and 7 are zero
+    bytes 2-3    writer id (uint16)
+    bytes 4-7    counter (uint32), strictly increasing per writer
+    byte  8      target marker id: the tag this write is for
+    byte  9      new urgency (0 when absent)
+    byte  10     new status (0 when absent)
+    byte  11     new destination (0 when absent)
+    bytes 12-19  MAC: HMAC-SHA256(site key, bytes 0-11) truncated to 8 bytes
+
+The MAC is checked before any other field is interpreted, so a forger learns
+nothing from which error comes back.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+from dataclasses import dataclass
+from typing import Final
+
+from swarmtag.errors import FieldRangeError, ForgedWrite, MalformedWrite
+from swarmtag.tag.codec import MAX_URGENCY
+from swarmtag.tag.lifecycle import Change, Role
+from swarmtag.tag.status import TagStatus
+
+__all__ = [
+    "MAC_LENGTH",
+    "MIN_KEY_LENGTH",
+    "WRITE_LENGTH",
+    "WRITE_VERSION",
+    "Write",
+    "WriteSigner",
+    "check_site_key",
+    "sign",
+    "verify",
+]
+
+WRITE_LENGTH: Final = 20
+"""One ATT write at the default MTU (23) carries 20 bytes of value."""
+WRITE_VERSION: Final = 0x01
+MAC_LENGTH: Final = 8
+MIN_KEY_LENGTH: Final = 16
+"""Site keys shorter than 128 bits are refused."""
+MAX_COUNTER: Final = 0xFFFF_FFFF
+
+_SIGNED: Final = WRITE_LENGTH - MAC_LENGTH
+_ROLE_BITS: Final = 0x03
+_URGENCY_BIT: Final = 0x10
+_STATUS_BIT: Final = 0x20
+_DESTINATION_BIT: Final = 0x40
+_KNOWN_BITS: Final = _ROLE_BITS | _URGENCY_BIT | _STATUS_BIT | _DESTINATION_BIT
+
+
+def check_site_key(key: bytes) -> bytes:
+    """Return ``key`` as bytes if it is a usable site key (at least 16 bytes)."""
+    if not isinstance(key, bytes | bytearray) or len(key) < MIN_KEY_LENGTH:
+        size = len(key) if isinstance(key, bytes | bytearray) else type(key).__name__
+        raise FieldRangeError(f"site_key: must be at least {MIN_KEY_LENGTH} bytes, got {size}")
+    return bytes(key)
+
+
+def _in_range(name: str, value: int, high: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= high:
+        raise FieldRangeError(f"{name}: {value!r} is not an integer in 0-{high}")
+
+
+@dataclass(frozen=True, slots=True)
+class Write:
+    """One write's content before signing: who, which counter, which tag, what changes."""
+
+    writer: int
+    role: Role
+    counter: int
+    target: int
+    change: Change
+
+    def __post_init__(self) -> None:
+        _in_range("writer", self.writer, 0xFFFF)
+        _in_range("counter", self.counter, MAX_COUNTER)
+        _in_range("target", self.target, 0xFF)
+        object.__setattr__(self, "role", Role(self.role))
+        if self.change.empty:
+            raise FieldRangeError("change: a write must set at least one field")
+        if self.change.urgency is not None:
+            _in_range("urgency", self.change.urgency, MAX_URGENCY)
+        if self.change.destination is not None:
+            _in_range("destination", self.change.destination, 0xFF)
+        if self.change.status is not None and not isinstance(self.change.status, TagStatus):
+            raise FieldRangeError(f"status: {self.change.status!r} is not a TagStatus")
+
+
+def _mac(key: bytes, signed: bytes) -> bytes:
+    return hmac.new(key, signed, hashlib.sha256).digest()[:MAC_LENGTH]
+
+
+def sign(write: Write, key: bytes) -> bytes:
+    """The 20 bytes to send for ``write`` under the site ``key``.
+
+    >>> msg = sign(Write(writer=7, role=Role.ROBOT, counter=1, target=12,
+    ...                  change=Change(status=TagStatus.PICKED_UP)), b"k" * 16)
+    >>> len(msg), msg[:12].hex()
+    (20, '01210700010000000c000200')
+    """
+    change = write.change
+    flags = int(write.role)
+    flags |= _URGENCY_BIT if change.urgency is not None else 0
+    flags |= _STATUS_BIT if change.status is not None else 0
+    flags |= _DESTINATION_BIT if change.destination is not None else 0
+    signed = (
+        bytes((WRITE_VERSION, flags))
+        + write.writer.to_bytes(2, "little")
+        + write.counter.to_bytes(4, "little")
+        + bytes(
+            (
+                write.target,
+                change.urgency or 0,
+                int(change.status or 0),
+                change.destination or 0,
+            )
+        )
+    )
+    return signed + _mac(check_site_key(key), signed)
+
+
+def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
+    """Check the MAC, then parse; raise ``ForgedWrite`` or ``MalformedWrite`` if not valid."""
+    data = bytes(message)
+    if len(data) != WRITE_LENGTH:
+        raise MalformedWrite(f"a write is {WRITE_LENGTH} bytes, got {len(data)}")
+    signed, tag = data[:_SIGNED], data[_SIGNED:]
+    if not hmac.compare_digest(_mac(check_site_key(key), signed), tag):
+        raise ForgedWrite("the write's MAC does not verify under the site key")
+    version, flags = signed[0], signed[1]
+    if version != WRITE_VERSION:
+        raise MalformedWrite(f"write format version {version} is not supported (expected 1)")
+    if flags & ~_KNOWN_BITS:
+        raise MalformedWrite(f"flags byte 0x{flags:02x} sets reserved bits")
+    try:
+        role = Role(flags & _ROLE_BITS)
+    except ValueError:
+        raise MalformedWrite(
+            f"role {flags & _ROLE_BITS} is not 1 (robot) or 2 (operator)"
+        ) from None
+    urgency, status, destination = signed[9], signed[10], signed[11]
+    for bit, name, value in (
+        (_URGENCY_BIT, "urgency", urgency),
+        (_STATUS_BIT, "status", status),
+        (_DESTINATION_BIT, "destination", destination),
+    ):
+        if not flags & bit and value:
+            raise MalformedWrite(f"{name} byte is {value} but the flags say it is absent")
+    if flags & _URGENCY_BIT and urgency > MAX_URGENCY:
+        raise MalformedWrite(f"urgency {urgency} is not in 0-{MAX_URGENCY}")
+    new_status: TagStatus | None = None
+    if flags & _STATUS_BIT:
+        try:
+            new_status = TagStatus(status)
+        except ValueError:
+            raise MalformedWrite(f"status byte 0x{status:02x} is not a tag status") from None
+    try:
+        return Write(
+            writer=int.from_bytes(signed[2:4], "little"),
+            role=role,
+            counter=int.from_bytes(signed[4:8], "little"),
+            target=signed[8],
+            change=Change(
+                urgency=urgency if flags & _URGENCY_BIT else None,
+                status=new_status,
+                destination=destination if flags & _DESTINATION_BIT else None,
+            ),
+        )
+    except FieldRangeError as error:  # an authentic write that sets no field
+        raise MalformedWrite(str(error)) from None
+
+
+@dataclass
+class WriteSigner:
+    """A writer's side: signs changes with its id, role and an increasing counter.
+
+    ``counter`` is the last counter used; persist it across restarts (the tags
+    refuse any counter they have already seen from this writer).
+    """
+
+    writer: int
+    role: Role
+    key: bytes
+    counter: int = -1
+
+    def __post_init__(self) -> None:
+        self.key = check_site_key(self.key)
+        _in_range("writer", self.writer, 0xFFFF)
+
+    def sign(self, target: int, change: Change) -> bytes:
+        """Sign ``change`` for the tag with marker ``target`` using the next counter."""
+        write = Write(
+            writer=self.writer,
+            role=self.role,
+            counter=self.counter + 1,
+            target=target,
+            change=change,
+        )
+        self.counter = write.counter
+        return sign(write, self.key)

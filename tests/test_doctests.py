@@ -1,0 +1,20 @@
+"""Run the docstring examples of every module: documentation that cannot drift."""
+
+from __future__ import annotations
+
+import doctest
+import importlib
+import pkgutil
+
+import pytest
+
+import swarmtag
+
+MODULES = sorted(info.name for info in pkgutil.walk_packages(swarmtag.__path__, prefix="swarmtag."))
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_module_doctests(name):
+    module = importlib.import_module(name)
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert result.failed == 0, f"{result.failed} doctest(s) failed in {name}"
