@@ -6,7 +6,16 @@ import importlib
 
 import pytest
 
-PACKAGES = ["swarmtag", "swarmtag.tag", "swarmtag.policy", "swarmtag.errors", "swarmtag.cli"]
+PACKAGES = [
+    "swarmtag",
+    "swarmtag.tag",
+    "swarmtag.policy",
+    "swarmtag.errors",
+    "swarmtag.cli",
+    "swarmtag.io",
+    "swarmtag.analysis",
+    "swarmtag.data",
+]
 
 
 @pytest.mark.parametrize("name", PACKAGES)

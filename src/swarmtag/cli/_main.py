@@ -9,6 +9,7 @@ import click
 
 from swarmtag import __version__
 from swarmtag.cli.demo import demo
+from swarmtag.cli.metrics import metrics
 from swarmtag.cli.tag import tag
 from swarmtag.errors import SwarmtagError
 
@@ -28,6 +29,7 @@ def app() -> None:
 
 app.add_command(tag)
 app.add_command(demo)
+app.add_command(metrics)
 
 
 def _one_line(text: str) -> str:

@@ -7,7 +7,12 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from swarmtag.analysis import summarize
+from swarmtag.cli._console import make_console
+from swarmtag.cli.metrics import render_report
+from swarmtag.data import example_trial_path
 from swarmtag.errors import WriteRejected
+from swarmtag.io import read_event_log
 from swarmtag.policy import Policy, Proximity, Urgency, Weighted, select
 from swarmtag.tag import (
     Change,
@@ -125,10 +130,19 @@ def _selection(console: Console) -> None:
     console.print("  columns: " + ", ".join(f"{_SHORT[p.name]} = {p.name}" for p in _POLICIES))
 
 
+def _metrics(console: Console) -> None:
+    path = example_trial_path()
+    console.print(f"\n[bold]Metrics of a physical-style trial log (SPEC §5)[/bold]: {path}")
+    console.print(f"  the same as: swarmtag metrics {path}\n")
+    report = summarize(read_event_log(path), baseline=None, n_resamples=10_000, seed=0)
+    render_report(report, console)
+
+
 @click.command()
 def demo() -> None:
-    """Show what swarmtag does so far: payloads, authenticated writes, carrier selection."""
-    console = Console()
+    """Show what swarmtag does so far: payloads, writes, selection, trial-log metrics."""
+    console = make_console()
     _payloads(console)
     _writes(console)
     _selection(console)
+    _metrics(console)

@@ -1,0 +1,261 @@
+"""Bootstrap over runs (SPEC §5.1): percentile intervals for every KPI and curve of a condition.
+
+A resample draws the condition's runs with replacement (as many as it has)
+and recomputes each figure; pooled figures (P95 and mean latency) are
+re-pooled from the resampled runs. The interval is the 2.5th and 97.5th
+percentile of the bootstrap values (numpy's default method) for a 95 % level.
+
+A figure can be undefined in a resample even when it is defined for the
+condition: latency when the resample holds only runs without deliveries,
+throughput when it holds only runs without one. Such resamples are left out
+of that figure's interval (``Estimate.n_undefined`` counts them); when no
+resample defines it, the interval is ``(None, None)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmtag.analysis._validation import check_options
+from swarmtag.analysis.alignment import CURVE_THRESHOLDS
+from swarmtag.analysis.curves import LATENCY_PERCENTILES, Curve, interval_percentiles
+from swarmtag.analysis.kpis import METRICS, ConditionKPIs, RunValues, condition_kpis, run_values
+from swarmtag.analysis.resampling import (
+    CHUNK_ELEMENTS,
+    condition_generator,
+    iter_multiplicities,
+    resampled_percentiles,
+)
+from swarmtag.analysis.runs import ConditionRuns
+from swarmtag.errors import StatisticsError
+
+__all__ = [
+    "ConditionStatistics",
+    "ConfidenceInterval",
+    "Estimate",
+    "condition_statistics",
+    "percentile_interval",
+]
+
+
+@dataclass(frozen=True)
+class ConfidenceInterval:
+    """Bounds of a confidence interval; ``None`` when no bootstrap value was defined."""
+
+    low: float | None
+    high: float | None
+
+
+def percentile_interval(
+    replicates: ArrayLike, *, confidence_level: float = 0.95
+) -> ConfidenceInterval:
+    """The percentile interval of bootstrap values, leaving out undefined (NaN) ones.
+
+    >>> percentile_interval(np.arange(101.0))
+    ConfidenceInterval(low=2.5, high=97.5)
+    >>> percentile_interval([np.nan, np.nan])
+    ConfidenceInterval(low=None, high=None)
+    """
+    values = np.asarray(replicates, dtype=np.float64)
+    defined = values[~np.isnan(values)]
+    if defined.size == 0:
+        return ConfidenceInterval(low=None, high=None)
+    low, high = np.percentile(defined, interval_percentiles(confidence_level))
+    return ConfidenceInterval(low=float(low), high=float(high))
+
+
+@dataclass(frozen=True, eq=False)
+class Estimate:
+    """A figure, its bootstrap values (NaN where undefined) and its percentile interval."""
+
+    value: float | None
+    confidence_interval: ConfidenceInterval
+    bootstrap_distribution: NDArray[np.float64]
+
+    @property
+    def n_undefined(self) -> int:
+        """Resamples in which the figure was undefined (left out of the interval)."""
+        return int(np.isnan(self.bootstrap_distribution).sum())
+
+
+@dataclass(frozen=True, eq=False)
+class ConditionStatistics:
+    """Every figure of one condition with its bootstrap interval, plus the curves.
+
+    ``values`` holds the per-run values (used by Mann-Whitney); the
+    estimates' bootstrap values are paired by resample index, so a difference
+    between two conditions can be bootstrapped from them directly.
+    """
+
+    condition: str
+    kpis: ConditionKPIs
+    values: RunValues
+    n_resamples: int
+    seed: int
+    confidence_level: float
+    p95_latency: Estimate
+    mean_latency: Estimate
+    throughput: Estimate
+    pa: Estimate
+    deliveries_per_run: Estimate
+    pa_curve: Curve
+    latency_curve: Curve
+
+    def estimate(self, metric: str) -> Estimate:
+        """The estimate of ``metric`` (one of ``METRICS``)."""
+        if metric not in METRICS:
+            raise StatisticsError(
+                f"unknown metric {metric!r}; expected one of {', '.join(METRICS)}"
+            )
+        estimate: Estimate = getattr(self, metric)
+        return estimate
+
+
+def _ratio(numerator: NDArray[np.float64], denominator: NDArray[np.float64]) -> NDArray[np.float64]:
+    out = np.full(numerator.shape, np.nan)
+    np.divide(numerator, denominator, out=out, where=denominator > 0)
+    return out
+
+
+def _replicates(
+    values: RunValues,
+    *,
+    n_resamples: int,
+    seed: int,
+    curve_thresholds: Sequence[int],
+    curve_percentiles: Sequence[float],
+    chunk_elements: int,
+) -> tuple[dict[str, NDArray[np.float64]], NDArray[np.float64], NDArray[np.float64]]:
+    """Bootstrap values of every metric ``(B,)``, of the PA curve and of the latency curve."""
+    n_runs = values.n_runs
+    throughput = values.throughput
+    has_throughput = ~np.isnan(throughput)
+    per_run = np.column_stack(
+        [
+            values.latency_sum,
+            values.deliveries,
+            np.where(has_throughput, throughput, 0.0),
+            has_throughput,
+            values.pa,
+            values.pa_curve(curve_thresholds),
+        ]
+    ).astype(np.float64)
+    percentiles = [95, *curve_percentiles]
+    metrics = np.empty((n_resamples, len(METRICS)))
+    pa_curve = np.empty((n_resamples, len(curve_thresholds)))
+    latency_curve = np.empty((n_resamples, len(curve_percentiles)))
+    latencies = values.latencies
+    rng = condition_generator(seed, values.condition)
+    chunks = iter_multiplicities(
+        rng,
+        n_runs,
+        n_resamples,
+        width=max(n_runs, latencies.values.size),
+        chunk_elements=chunk_elements,
+    )
+    start = 0
+    for weights in chunks:
+        stop = start + len(weights)
+        sums = weights.astype(np.float64) @ per_run
+        pooled = resampled_percentiles(latencies.values, latencies.runs, weights, percentiles)
+        metrics[start:stop, 0] = pooled[:, 0]
+        metrics[start:stop, 1] = _ratio(sums[:, 0], sums[:, 1])
+        metrics[start:stop, 2] = _ratio(sums[:, 2], sums[:, 3])
+        metrics[start:stop, 3] = sums[:, 4] / n_runs
+        metrics[start:stop, 4] = sums[:, 1] / n_runs
+        pa_curve[start:stop] = sums[:, 5:] / n_runs
+        latency_curve[start:stop] = pooled[:, 1:]
+        start = stop
+    by_metric = {}
+    for column, metric in enumerate(METRICS):
+        replicate = np.ascontiguousarray(metrics[:, column])
+        replicate.flags.writeable = False
+        by_metric[metric] = replicate
+    return by_metric, pa_curve, latency_curve
+
+
+def condition_statistics(
+    runs: ConditionRuns,
+    *,
+    n_resamples: int = 10_000,
+    seed: int = 0,
+    confidence_level: float = 0.95,
+    curve_thresholds: Sequence[int] = CURVE_THRESHOLDS,
+    curve_percentiles: Sequence[float] = LATENCY_PERCENTILES,
+    _chunk_elements: int = CHUNK_ELEMENTS,
+) -> ConditionStatistics:
+    """KPIs of one condition with bootstrap-over-runs intervals, and its curves with bands.
+
+    The resamples come from a generator keyed by ``seed`` and the condition's
+    name, so they do not depend on which other conditions are analysed.
+
+    >>> from swarmtag.io import CarrierLog
+    >>> log = CarrierLog(condition=["c"] * 4, run=[0, 1, 2, 3], seed=[0] * 4, carrier=[1] * 4,
+    ...     urgency0=[5] * 4, order_time=[0.0] * 4, pickup_time=[1.0] * 4,
+    ...     delivery_time=[10.0, 20.0, 30.0, 40.0], robot=[0] * 4)
+    >>> stats = condition_statistics(ConditionRuns.from_log(log, "c"), n_resamples=2000)
+    >>> stats.mean_latency.value
+    25.0
+    >>> ci = stats.mean_latency.confidence_interval
+    >>> 10.0 <= ci.low < 25.0 < ci.high <= 40.0
+    True
+    """
+    check_options(
+        n_resamples=n_resamples,
+        seed=seed,
+        confidence_level=confidence_level,
+        curve_thresholds=curve_thresholds,
+        curve_percentiles=curve_percentiles,
+    )
+    values = run_values(runs, curve_thresholds=curve_thresholds)
+    kpis = condition_kpis(values)
+    replicates, pa_replicates, latency_replicates = _replicates(
+        values,
+        n_resamples=n_resamples,
+        seed=seed,
+        curve_thresholds=curve_thresholds,
+        curve_percentiles=curve_percentiles,
+        chunk_elements=_chunk_elements,
+    )
+    estimates = {
+        metric: Estimate(
+            value=kpis.value(metric),
+            confidence_interval=percentile_interval(
+                replicates[metric], confidence_level=confidence_level
+            ),
+            bootstrap_distribution=replicates[metric],
+        )
+        for metric in METRICS
+    }
+    pooled = values.latencies.values
+    latency_values = (
+        np.percentile(pooled, list(curve_percentiles))
+        if pooled.size
+        else np.full(len(curve_percentiles), np.nan)
+    )
+    return ConditionStatistics(
+        condition=runs.condition,
+        kpis=kpis,
+        values=values,
+        n_resamples=n_resamples,
+        seed=seed,
+        confidence_level=confidence_level,
+        p95_latency=estimates["p95_latency"],
+        mean_latency=estimates["mean_latency"],
+        throughput=estimates["throughput"],
+        pa=estimates["pa"],
+        deliveries_per_run=estimates["deliveries_per_run"],
+        pa_curve=Curve.from_replicates(
+            curve_thresholds,
+            np.mean(values.pa_curve(curve_thresholds), axis=0),
+            pa_replicates,
+            confidence_level,
+        ),
+        latency_curve=Curve.from_replicates(
+            curve_percentiles, latency_values, latency_replicates, confidence_level
+        ),
+    )

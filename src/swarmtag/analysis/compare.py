@@ -1,0 +1,122 @@
+"""Differences between a condition and the baseline (SPEC §5.1): bootstrap CI and two tests.
+
+``diff = condition - baseline``. Its bootstrap values pair the two
+conditions' own bootstrap values by resample index; as the two come from
+independent generators, this is exactly resampling the two conditions' runs
+independently. The two-sided bootstrap p-value is
+``min(1, 2 * min(#(diff* <= 0), #(diff* >= 0)) / B)`` over the resamples in
+which both figures are defined. The second test is Mann-Whitney U (two-sided,
+scipy's defaults) on the per-run values; runs without a value are left out,
+and the p-value is ``None`` when either side has no value at all.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmtag.analysis.bootstrap import (
+    ConditionStatistics,
+    ConfidenceInterval,
+    percentile_interval,
+)
+from swarmtag.analysis.kpis import METRICS
+from swarmtag.errors import StatisticsError
+
+__all__ = ["Comparison", "bootstrap_p_value", "compare", "compare_all", "mann_whitney_p"]
+
+
+def bootstrap_p_value(differences: ArrayLike) -> float | None:
+    """Two-sided p-value of a bootstrap distribution of differences; NaN values left out.
+
+    >>> bootstrap_p_value([1.0, 2.0, -1.0, 3.0])
+    0.5
+    >>> bootstrap_p_value([0.0, 0.0])
+    1.0
+    >>> bootstrap_p_value([np.nan]) is None
+    True
+    """
+    values = np.asarray(differences, dtype=np.float64)
+    defined = values[~np.isnan(values)]
+    if defined.size == 0:
+        return None
+    below = int(np.count_nonzero(defined <= 0))
+    above = int(np.count_nonzero(defined >= 0))
+    return min(1.0, 2 * min(below, above) / defined.size)
+
+
+def mann_whitney_p(x: ArrayLike, y: ArrayLike) -> float | None:
+    """Two-sided Mann-Whitney U p-value (scipy's defaults), NaN values left out.
+
+    ``None`` when either sample has no value.
+
+    >>> mann_whitney_p([1.0, 2.0, 3.0], [1.0, 2.0, 3.0])
+    1.0
+    >>> mann_whitney_p([1.0], [np.nan]) is None
+    True
+    """
+    first = np.asarray(x, dtype=np.float64)
+    second = np.asarray(y, dtype=np.float64)
+    first = first[~np.isnan(first)]
+    second = second[~np.isnan(second)]
+    if first.size == 0 or second.size == 0:
+        return None
+    # scipy.stats takes a while to import (and ships no stubs): load it when a test runs.
+    stats = importlib.import_module("scipy.stats")
+    return float(stats.mannwhitneyu(first, second, alternative="two-sided").pvalue)
+
+
+@dataclass(frozen=True, eq=False)
+class Comparison:
+    """One metric of one condition against the baseline: difference, CI and two p-values."""
+
+    condition: str
+    baseline: str
+    metric: str
+    diff: float | None
+    confidence_interval: ConfidenceInterval
+    p_bootstrap: float | None
+    p_mannwhitney: float | None
+    bootstrap_distribution: NDArray[np.float64]
+    """Bootstrap values of the difference; NaN where either figure was undefined."""
+
+
+def compare(
+    condition: ConditionStatistics, baseline: ConditionStatistics, metric: str
+) -> Comparison:
+    """Compare ``condition`` with ``baseline`` on ``metric`` (one of ``METRICS``)."""
+    if condition.n_resamples != baseline.n_resamples:
+        raise StatisticsError(
+            f"{condition.condition} has {condition.n_resamples} resamples but the baseline "
+            f"{baseline.condition} has {baseline.n_resamples}; compute both alike"
+        )
+    if condition.confidence_level != baseline.confidence_level:
+        raise StatisticsError("the two conditions were computed at different confidence levels")
+    mine, theirs = condition.estimate(metric), baseline.estimate(metric)
+    differences = mine.bootstrap_distribution - theirs.bootstrap_distribution
+    differences.flags.writeable = False
+    diff = None if mine.value is None or theirs.value is None else mine.value - theirs.value
+    return Comparison(
+        condition=condition.condition,
+        baseline=baseline.condition,
+        metric=metric,
+        diff=diff,
+        confidence_interval=percentile_interval(
+            differences, confidence_level=condition.confidence_level
+        ),
+        p_bootstrap=bootstrap_p_value(differences),
+        p_mannwhitney=mann_whitney_p(
+            condition.values.per_run(metric), baseline.values.per_run(metric)
+        ),
+        bootstrap_distribution=differences,
+    )
+
+
+def compare_all(
+    condition: ConditionStatistics, baseline: ConditionStatistics
+) -> tuple[Comparison, ...]:
+    """``compare`` for every metric, in the order of ``METRICS``."""
+    return tuple(compare(condition, baseline, metric) for metric in METRICS)

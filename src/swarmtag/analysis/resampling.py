@@ -1,0 +1,129 @@
+"""Vectorised resampling of whole runs: multiplicities, re-pooled percentiles, seeded streams.
+
+A bootstrap resample of ``R`` runs is represented by how often each run was
+drawn (a row of multiplicities summing to ``R``). Means over resampled runs
+are then a matrix product, and percentiles of re-pooled latencies are
+weighted order statistics: with the condition's latencies sorted once, the
+element at position ``i`` of a resample's (virtual) sorted sample is the
+first latency whose cumulative multiplicity exceeds ``i``. The result equals
+``np.percentile`` of the explicitly concatenated resample, bit for bit.
+
+Each condition draws from its own generator, keyed by a digest of its name
+(not its position among the conditions present), so adding or removing a
+condition never changes another condition's resamples.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Iterator, Sequence
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag.analysis.latency import interpolation_points, lerp
+
+__all__ = [
+    "condition_generator",
+    "condition_seed_sequence",
+    "iter_multiplicities",
+    "multiplicities",
+    "resampled_percentiles",
+]
+
+CHUNK_ELEMENTS: Final = 1 << 22
+"""Bound on (resamples in a chunk) x (runs or latencies): about 32 MiB per int64 array."""
+
+
+def condition_seed_sequence(seed: int, condition: str) -> np.random.SeedSequence:
+    """The seed sequence of a condition's bootstrap: master seed + digest of the condition name.
+
+    >>> condition_seed_sequence(0, "proximity").spawn_key == condition_seed_sequence(
+    ...     0, "proximity").spawn_key
+    True
+    """
+    digest = hashlib.sha256(condition.encode("utf-8")).digest()
+    return np.random.SeedSequence(seed, spawn_key=(int.from_bytes(digest[:8], "little"),))
+
+
+def condition_generator(seed: int, condition: str) -> np.random.Generator:
+    """A fresh generator for a condition's bootstrap (see ``condition_seed_sequence``)."""
+    return np.random.default_rng(condition_seed_sequence(seed, condition))
+
+
+def multiplicities(draws: NDArray[np.int64], n_runs: int) -> NDArray[np.int64]:
+    """How often each run appears in each resample: ``(B, R)`` draws to ``(B, R)`` counts.
+
+    >>> multiplicities(np.array([[0, 0, 2], [1, 2, 0]]), 3)
+    array([[2, 0, 1],
+           [1, 1, 1]])
+    """
+    n_resamples = draws.shape[0]
+    flat = (draws + n_runs * np.arange(n_resamples, dtype=np.int64)[:, None]).ravel()
+    counts = np.bincount(flat, minlength=n_resamples * n_runs)
+    return counts.reshape(n_resamples, n_runs).astype(np.int64)
+
+
+def iter_multiplicities(
+    rng: np.random.Generator,
+    n_runs: int,
+    n_resamples: int,
+    *,
+    width: int,
+    chunk_elements: int = CHUNK_ELEMENTS,
+) -> Iterator[NDArray[np.int64]]:
+    """Multiplicity rows for ``n_resamples`` resamples of ``n_runs`` runs, in chunks.
+
+    Chunks hold about ``chunk_elements / width`` resamples, where ``width``
+    is the widest per-resample array the caller builds. The draws are the
+    same whatever the chunk size: the generator hands out one stream.
+    """
+    rows = max(1, min(n_resamples, chunk_elements // max(1, width, n_runs)))
+    done = 0
+    while done < n_resamples:
+        take = min(rows, n_resamples - done)
+        yield multiplicities(rng.integers(0, n_runs, size=(take, n_runs)), n_runs)
+        done += take
+
+
+def resampled_percentiles(
+    values: NDArray[np.float64],
+    groups: NDArray[np.intp],
+    weights: NDArray[np.int64],
+    percentiles: Sequence[float],
+) -> NDArray[np.float64]:
+    """Percentiles of each resample's pooled values: ``(B, Q)``, NaN where a resample is empty.
+
+    ``values`` are sorted ascending and ``groups`` give each value's run;
+    ``weights`` is ``(B, R)``: how often each run is in each resample.
+
+    >>> values, groups = np.array([1.0, 2.0, 4.0]), np.array([0, 1, 0])
+    >>> resampled_percentiles(values, groups, np.array([[2, 0], [0, 2], [1, 1]]), [50])
+    array([[2.5],
+           [2. ],
+           [2. ]])
+    """
+    n_resamples = weights.shape[0]
+    result = np.full((n_resamples, len(percentiles)), np.nan)
+    if values.size == 0:
+        return result
+    cumulative = np.cumsum(weights[:, groups], axis=1)
+    totals = cumulative[:, -1].copy()
+    filled = np.flatnonzero(totals > 0)
+    if filled.size == 0:
+        return result
+    # One sorted search over all rows: shift row b by b * stride so rows never overlap.
+    stride = int(totals.max()) + 1
+    shift = np.arange(n_resamples, dtype=np.int64) * stride
+    cumulative += shift[:, None]
+    flat = cumulative.ravel()
+    counts = totals[filled]
+    row_shift = shift[filled]
+    row_base = filled * values.size
+    for column, q in enumerate(percentiles):
+        lower, upper, gamma = interpolation_points(counts, q)
+        low_at = np.searchsorted(flat, lower + row_shift, side="right") - row_base
+        high_at = np.searchsorted(flat, upper + row_shift, side="right") - row_base
+        result[filled, column] = lerp(values[low_at], values[high_at], gamma)
+    return result

@@ -1,0 +1,140 @@
+"""Every condition of an event log against a baseline: the figures ``swarmtag metrics`` shows.
+
+``summarize`` is pure (a log in, a report out); the JSON form of the report
+is the contract of SPEC §8.2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Final
+
+from swarmtag.analysis.bootstrap import ConditionStatistics, Estimate, condition_statistics
+from swarmtag.analysis.compare import Comparison, compare_all
+from swarmtag.analysis.kpis import METRICS
+from swarmtag.analysis.runs import split_conditions
+from swarmtag.errors import StatisticsError
+from swarmtag.io.tables import CarrierLog
+
+__all__ = ["DEFAULT_BASELINE", "JsonValue", "MetricsReport", "choose_baseline", "summarize"]
+
+DEFAULT_BASELINE: Final = "proximity"
+"""The baseline when none is named (else the first condition in sorted order)."""
+
+JsonValue = None | bool | int | float | str | list["JsonValue"] | dict[str, "JsonValue"]
+
+
+def choose_baseline(conditions: Sequence[str], requested: str | None = None) -> str:
+    """The requested baseline, else ``proximity``, else the first condition in sorted order.
+
+    >>> choose_baseline(["urgency:alpha=0.7", "proximity"])
+    'proximity'
+    >>> choose_baseline(["weighted:w=0.5", "weighted:w=0.1"])
+    'weighted:w=0.1'
+    """
+    names = sorted(conditions)
+    if not names:
+        raise StatisticsError("the event log has no rows: there is nothing to analyse")
+    if requested is not None:
+        if requested not in names:
+            raise StatisticsError(
+                f"unknown baseline {requested!r}; the log has conditions {', '.join(names)}"
+            )
+        return requested
+    return DEFAULT_BASELINE if DEFAULT_BASELINE in names else names[0]
+
+
+def _estimate_json(estimate: Estimate) -> dict[str, JsonValue]:
+    interval = estimate.confidence_interval
+    return {"value": estimate.value, "ci": [interval.low, interval.high]}
+
+
+@dataclass(frozen=True, eq=False)
+class MetricsReport:
+    """Statistics of every condition (baseline first, then sorted) and comparisons with it."""
+
+    baseline: str
+    n_resamples: int
+    seed: int
+    confidence_level: float
+    time_unit: str | None
+    conditions: tuple[ConditionStatistics, ...]
+    comparisons: tuple[Comparison, ...]
+
+    def condition(self, name: str) -> ConditionStatistics:
+        """The statistics of one condition."""
+        for statistics in self.conditions:
+            if statistics.condition == name:
+                return statistics
+        raise StatisticsError(f"no condition {name!r} in this report")
+
+    def to_json(self) -> dict[str, JsonValue]:
+        """The JSON object of SPEC §8.2 (``None`` becomes ``null``)."""
+        conditions: list[JsonValue] = []
+        for statistics in self.conditions:
+            entry: dict[str, JsonValue] = {
+                "condition": statistics.condition,
+                "runs": statistics.kpis.runs,
+            }
+            for metric in METRICS:
+                entry[metric] = _estimate_json(statistics.estimate(metric))
+            entry["total_deliveries"] = statistics.kpis.total_deliveries
+            entry["undelivered"] = statistics.kpis.undelivered
+            conditions.append(entry)
+        comparisons: list[JsonValue] = [
+            {
+                "condition": comparison.condition,
+                "baseline": comparison.baseline,
+                "metric": comparison.metric,
+                "diff": comparison.diff,
+                "ci": [comparison.confidence_interval.low, comparison.confidence_interval.high],
+                "p_bootstrap": comparison.p_bootstrap,
+                "p_mannwhitney": comparison.p_mannwhitney,
+            }
+            for comparison in self.comparisons
+        ]
+        return {"conditions": conditions, "comparisons": comparisons}
+
+
+def summarize(
+    log: CarrierLog,
+    *,
+    baseline: str | None = None,
+    n_resamples: int = 10_000,
+    seed: int = 0,
+    confidence_level: float = 0.95,
+) -> MetricsReport:
+    """KPIs with bootstrap intervals for every condition, and differences from the baseline.
+
+    >>> from swarmtag.io import CarrierLog
+    >>> log = CarrierLog(condition=["proximity", "urgency:alpha=3.0"], run=[0, 0], seed=[0, 0],
+    ...     carrier=[1, 1], urgency0=[5, 5], order_time=[0.0, 0.0], pickup_time=[1.0, 1.0],
+    ...     delivery_time=[20.0, 12.0], robot=[0, 0])
+    >>> report = summarize(log, n_resamples=100)
+    >>> [(c.metric, c.diff) for c in report.comparisons][:2]
+    [('p95_latency', -8.0), ('mean_latency', -8.0)]
+    """
+    groups = split_conditions(log)
+    chosen = choose_baseline(list(groups), baseline)
+    order = [chosen, *(name for name in groups if name != chosen)]
+    statistics = {
+        name: condition_statistics(
+            groups[name], n_resamples=n_resamples, seed=seed, confidence_level=confidence_level
+        )
+        for name in order
+    }
+    comparisons = tuple(
+        comparison
+        for name in order[1:]
+        for comparison in compare_all(statistics[name], statistics[chosen])
+    )
+    return MetricsReport(
+        baseline=chosen,
+        n_resamples=n_resamples,
+        seed=seed,
+        confidence_level=confidence_level,
+        time_unit=log.time_unit,
+        conditions=tuple(statistics[name] for name in order),
+        comparisons=comparisons,
+    )

@@ -1,0 +1,290 @@
+"""The columns of the event-log tables (SPEC §8.1) and the checks on their values.
+
+Each table is a tuple of ``ColumnSpec``: one spec drives parsing (CSV cells,
+Parquet columns), checking (types and ranges) and writing, so the three never
+disagree. Messages name the file, the row and the column, and say what was
+expected. Rows are named ``line N`` for CSV files (the line of the file, the
+header being line 1, i.e. the row number a spreadsheet shows) and ``row N``
+otherwise (the 1-based data row, header not counted).
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmtag.errors import EventLogError
+
+__all__ = [
+    "CARRIER_SCHEMA",
+    "EVENT_SCHEMA",
+    "MISSING_ID",
+    "TIME_UNITS",
+    "TIME_UNIT_COLUMN",
+    "ColumnSpec",
+    "Kind",
+    "RowLocator",
+    "check_column",
+    "check_time_unit",
+    "finish_float",
+    "finish_int",
+    "finish_text",
+]
+
+MISSING_ID: Final = -1
+"""In-memory value of an empty integer cell (a robot, an event's carrier): "none"."""
+TIME_UNITS: Final = ("tick", "s")
+"""Allowed values of the optional ``time_unit`` column: simulator ticks or seconds."""
+TIME_UNIT_COLUMN: Final = "time_unit"
+_INT64_MAX: Final = int(np.iinfo(np.int64).max)
+
+
+class Kind(enum.Enum):
+    """What a column holds; the value is the word used in messages."""
+
+    TEXT = "text"
+    INT = "an integer"
+    FLOAT = "a number"
+
+
+@dataclass(frozen=True, slots=True)
+class ColumnSpec:
+    """One column: its name, kind, whether a cell may be empty, and its integer range.
+
+    An empty cell means "never" or "none": NaN for numbers, ``MISSING_ID`` for
+    integers.
+    """
+
+    name: str
+    kind: Kind
+    nullable: bool = False
+    minimum: int | None = None
+    maximum: int | None = None
+
+    def expected(self) -> str:
+        """What a valid cell looks like, for messages: ``an integer in 0-9``."""
+        text = self.kind.value
+        if self.minimum is not None and self.maximum is not None:
+            text += f" in {self.minimum}-{self.maximum}"
+        elif self.minimum is not None:
+            text += f" >= {self.minimum}"
+        if self.nullable:
+            text += ", or empty"
+        return text
+
+
+CARRIER_SCHEMA: Final = (
+    ColumnSpec("condition", Kind.TEXT),
+    ColumnSpec("run", Kind.INT, minimum=0),
+    ColumnSpec("seed", Kind.INT, minimum=0),
+    ColumnSpec("carrier", Kind.INT, minimum=0),
+    ColumnSpec("urgency0", Kind.INT, minimum=0, maximum=9),
+    ColumnSpec("order_time", Kind.FLOAT),
+    ColumnSpec("pickup_time", Kind.FLOAT, nullable=True),
+    ColumnSpec("delivery_time", Kind.FLOAT, nullable=True),
+    ColumnSpec("robot", Kind.INT, nullable=True, minimum=0),
+)
+"""The per-carrier table: one row per carrier per run, in the order files carry it."""
+
+EVENT_SCHEMA: Final = (
+    ColumnSpec("condition", Kind.TEXT),
+    ColumnSpec("seed", Kind.INT, minimum=0),
+    ColumnSpec("run", Kind.INT, minimum=0),
+    ColumnSpec("time", Kind.FLOAT),
+    ColumnSpec("kind", Kind.TEXT),
+    ColumnSpec("carrier", Kind.INT, nullable=True, minimum=0),
+    ColumnSpec("robot", Kind.INT, nullable=True, minimum=0),
+    ColumnSpec("value", Kind.FLOAT, nullable=True),
+)
+"""The optional long-format event table: everything else that happened in a run."""
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class RowLocator:
+    """Names rows in messages: ``line N`` of a CSV file, else ``row N`` (1-based data row).
+
+    >>> RowLocator(source="events.csv", lines=np.array([2, 3])).error(1, "run", "oops")
+    EventLogError('events.csv: line 3, column run: oops')
+    >>> RowLocator().where_many([0, 4])
+    'rows 1 and 5'
+    """
+
+    source: str | None = None
+    lines: NDArray[np.int64] | None = None
+
+    def where(self, index: int) -> str:
+        """``line N`` or ``row N`` for the data row at 0-based ``index``."""
+        if self.lines is not None:
+            return f"line {int(self.lines[index])}"
+        return f"row {index + 1}"
+
+    def where_many(self, indices: Sequence[int]) -> str:
+        """``lines 8 and 12`` / ``rows 3, 5 and 9`` for several data rows."""
+        if self.lines is not None:
+            word, numbers = "lines", [str(int(self.lines[i])) for i in indices]
+        else:
+            word, numbers = "rows", [str(i + 1) for i in indices]
+        if len(numbers) == 1:
+            return f"{word[:-1]} {numbers[0]}"
+        return f"{word} {', '.join(numbers[:-1])} and {numbers[-1]}"
+
+    def prefix(self) -> str:
+        """``file: `` when the table came from a file, else nothing."""
+        return f"{self.source}: " if self.source else ""
+
+    def error(self, index: int, column: str, problem: str) -> EventLogError:
+        """An error naming file, row and column."""
+        return EventLogError(f"{self.prefix()}{self.where(index)}, column {column}: {problem}")
+
+    def table_error(self, problem: str) -> EventLogError:
+        """An error about the table as a whole (a missing column, a wrong column type)."""
+        return EventLogError(f"{self.prefix()}{problem}")
+
+
+def _first(mask: NDArray[np.bool_]) -> int | None:
+    hits = np.flatnonzero(mask)
+    return int(hits[0]) if hits.size else None
+
+
+def _empty_error(spec: ColumnSpec, index: int, loc: RowLocator) -> EventLogError:
+    return loc.error(index, spec.name, f"is empty; expected {spec.expected()}")
+
+
+def finish_text(spec: ColumnSpec, values: NDArray[np.str_], loc: RowLocator) -> NDArray[np.str_]:
+    """Check a text column (already stripped): no empty cell."""
+    bad = _first(values == "")
+    if bad is not None:
+        raise _empty_error(spec, bad, loc)
+    return values
+
+
+def finish_int(
+    spec: ColumnSpec, values: NDArray[np.int64], present: NDArray[np.bool_], loc: RowLocator
+) -> NDArray[np.int64]:
+    """Check the range of the present integers; fill missing cells with ``MISSING_ID``."""
+    if not spec.nullable:
+        bad = _first(~present)
+        if bad is not None:
+            raise _empty_error(spec, bad, loc)
+    out_of_range = np.zeros(values.shape, dtype=bool)
+    if spec.minimum is not None:
+        out_of_range |= values < spec.minimum
+    if spec.maximum is not None:
+        out_of_range |= values > spec.maximum
+    bad = _first(out_of_range & present)
+    if bad is not None:
+        raise loc.error(bad, spec.name, f"{int(values[bad])} is not {spec.expected()}")
+    return np.where(present, values, MISSING_ID).astype(np.int64)
+
+
+def finish_float(
+    spec: ColumnSpec, values: NDArray[np.float64], present: NDArray[np.bool_], loc: RowLocator
+) -> NDArray[np.float64]:
+    """Check that the present numbers are finite; fill missing cells with NaN."""
+    if not spec.nullable:
+        bad = _first(~present)
+        if bad is not None:
+            raise _empty_error(spec, bad, loc)
+    bad = _first(present & ~np.isfinite(values))
+    if bad is not None:
+        raise loc.error(bad, spec.name, f"{float(values[bad])!r} is not a finite number")
+    return np.where(present, values, np.nan)
+
+
+def _wrong_type(spec: ColumnSpec, dtype: np.dtype[np.generic], loc: RowLocator) -> EventLogError:
+    return loc.table_error(f"column {spec.name} holds {dtype}; expected {spec.kind.value} per row")
+
+
+def _check_text(spec: ColumnSpec, arr: NDArray[np.generic], loc: RowLocator) -> NDArray[np.str_]:
+    if arr.dtype.kind == "O":
+        for index, item in enumerate(arr.tolist()):
+            if not isinstance(item, str):
+                raise loc.error(index, spec.name, f"{item!r} is not {spec.kind.value}")
+        arr = arr.astype(str)
+    if arr.dtype.kind != "U":
+        raise _wrong_type(spec, arr.dtype, loc)
+    text = arr.astype(str)
+    bad = _first(np.char.strip(text) != text)
+    if bad is not None:
+        raise loc.error(bad, spec.name, f"{str(text[bad])!r} has white space at its ends")
+    return finish_text(spec, text, loc)
+
+
+def _check_int(spec: ColumnSpec, arr: NDArray[np.generic], loc: RowLocator) -> NDArray[np.int64]:
+    if arr.dtype.kind == "f":
+        floats = arr.astype(np.float64)
+        finite = np.isfinite(floats)
+        bad = _first(~finite & ~np.isnan(floats)) if spec.nullable else _first(~finite)
+        if bad is None:
+            bad = _first(finite & ((floats != np.round(floats)) | (np.abs(floats) >= 2.0**63)))
+        if bad is not None:
+            raise loc.error(bad, spec.name, f"{float(floats[bad])!r} is not {spec.expected()}")
+        values = np.where(finite, floats, 0).astype(np.int64)
+        return finish_int(spec, values, finite, loc)
+    if arr.dtype.kind == "u":
+        unsigned = arr.astype(np.uint64)
+        bad = _first(unsigned > _INT64_MAX)
+        if bad is not None:
+            raise loc.error(bad, spec.name, f"{int(unsigned[bad])} is too large")
+    elif arr.dtype.kind != "i":
+        raise _wrong_type(spec, arr.dtype, loc)
+    values = arr.astype(np.int64)
+    present = values != MISSING_ID if spec.nullable else np.ones(values.shape, dtype=bool)
+    return finish_int(spec, values, present, loc)
+
+
+def _check_float(
+    spec: ColumnSpec, arr: NDArray[np.generic], loc: RowLocator
+) -> NDArray[np.float64]:
+    if arr.dtype.kind not in "fiu":
+        raise _wrong_type(spec, arr.dtype, loc)
+    values = arr.astype(np.float64)
+    present = ~np.isnan(values) if spec.nullable else np.ones(values.shape, dtype=bool)
+    return finish_float(spec, values, present, loc)
+
+
+def check_column(spec: ColumnSpec, values: ArrayLike, loc: RowLocator) -> NDArray[np.generic]:
+    """Turn an in-memory column into its canonical read-only array, or raise ``EventLogError``.
+
+    Text becomes a unicode array, integers int64 (``MISSING_ID`` = none),
+    numbers float64 (NaN = never). Integral floats are accepted as integers.
+
+    >>> check_column(CARRIER_SCHEMA[4], [3, 12], RowLocator())
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.EventLogError: row 2, column urgency0: 12 is not an integer in 0-9
+    """
+    if spec.kind is Kind.TEXT and not isinstance(values, np.ndarray):
+        arr = np.asarray(values, dtype=object)  # numpy would silently turn 3 into "3"
+    else:
+        arr = np.asarray(values)
+    if arr.ndim != 1:
+        raise loc.table_error(
+            f"column {spec.name} has shape {arr.shape}; expected one value per row"
+        )
+    if arr.size == 0:  # an empty list has no dtype worth checking
+        arr = arr.astype({Kind.TEXT: str, Kind.INT: np.int64, Kind.FLOAT: np.float64}[spec.kind])
+    if arr.dtype.kind == "b":
+        raise _wrong_type(spec, arr.dtype, loc)
+    result: NDArray[np.generic]
+    if spec.kind is Kind.TEXT:
+        result = _check_text(spec, arr, loc)
+    elif spec.kind is Kind.INT:
+        result = _check_int(spec, arr, loc)
+    else:
+        result = _check_float(spec, arr, loc)
+    result = result.copy() if np.may_share_memory(result, arr) else result
+    result.flags.writeable = False
+    return result
+
+
+def check_time_unit(time_unit: str | None) -> str | None:
+    """Accept ``None`` (not stated), ``"tick"`` or ``"s"``."""
+    if time_unit is not None and time_unit not in TIME_UNITS:
+        raise EventLogError(f"time unit {time_unit!r} is not one of {', '.join(TIME_UNITS)}")
+    return time_unit

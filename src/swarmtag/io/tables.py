@@ -1,0 +1,285 @@
+"""The two event-log tables of SPEC §8.1 as columns of numpy arrays.
+
+``CarrierLog`` holds one row per carrier per run (what every KPI is computed
+from); ``EventTable`` holds the optional long-format events (selections,
+abandoned pursuits, re-prioritisations, breakdowns). Both are immutable,
+checked on construction, and built the same way by the simulator (directly)
+and by the file readers (with file and line numbers in their messages).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import ClassVar, Self
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from swarmtag.io.schema import (
+    CARRIER_SCHEMA,
+    EVENT_SCHEMA,
+    ColumnSpec,
+    RowLocator,
+    check_column,
+    check_time_unit,
+)
+
+__all__ = ["CarrierLog", "EventTable"]
+
+
+class _Columns:
+    """Shared behaviour of the two tables: checked columns, length, equality, row selection."""
+
+    SCHEMA: ClassVar[tuple[ColumnSpec, ...]]
+    condition: NDArray[np.str_]
+    time_unit: str | None
+
+    def _set_columns(
+        self, columns: Mapping[str, ArrayLike], time_unit: str | None, loc: RowLocator
+    ) -> None:
+        length: int | None = None
+        for spec in self.SCHEMA:
+            array = check_column(spec, columns[spec.name], loc)
+            if length is not None and len(array) != length:
+                raise loc.table_error(
+                    f"column {spec.name} has {len(array)} rows but column "
+                    f"{self.SCHEMA[0].name} has {length}"
+                )
+            length = len(array)
+            object.__setattr__(self, spec.name, array)
+        object.__setattr__(self, "time_unit", check_time_unit(time_unit))
+        self._check_rows(loc)
+
+    def _check_rows(self, loc: RowLocator) -> None:
+        """Checks across columns; none by default."""
+
+    @classmethod
+    def _build(
+        cls, columns: Mapping[str, ArrayLike], time_unit: str | None, loc: RowLocator
+    ) -> Self:
+        """Construct with messages that name a file and its lines (used by the readers)."""
+        table = cls.__new__(cls)
+        table._set_columns(columns, time_unit, loc)
+        return table
+
+    def columns(self) -> dict[str, NDArray[np.generic]]:
+        """The columns in schema order, as read-only arrays."""
+        return {spec.name: getattr(self, spec.name) for spec in self.SCHEMA}
+
+    def __len__(self) -> int:
+        return len(getattr(self, self.SCHEMA[0].name))
+
+    def take(self, rows: ArrayLike) -> Self:
+        """A table of the given rows (integer indices or a boolean mask), in that order."""
+        index = np.asarray(rows)
+        return self._build(
+            {name: column[index] for name, column in self.columns().items()},
+            self.time_unit,
+            RowLocator(),
+        )
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        assert isinstance(other, _Columns)
+        if self.time_unit != other.time_unit or len(self) != len(other):
+            return False
+        mine, theirs = self.columns(), other.columns()
+        return all(
+            np.array_equal(mine[name], theirs[name], equal_nan=mine[name].dtype.kind == "f")
+            for name in mine
+        )
+
+    __hash__ = None  # type: ignore[assignment]  # mutable-looking arrays: not hashable
+
+    def __repr__(self) -> str:
+        conditions = tuple(np.unique(self.condition).tolist())
+        return (
+            f"{type(self).__name__}(rows={len(self)}, conditions={conditions}, "
+            f"time_unit={self.time_unit!r})"
+        )
+
+
+@dataclass(frozen=True, eq=False, init=False, repr=False)
+class CarrierLog(_Columns):
+    """The per-carrier event log (SPEC §8.1): one row per carrier per run, as columns.
+
+    Missing times are NaN, a missing robot is ``MISSING_ID`` (-1). Arrays are
+    copied and made read-only. The constructor checks every column's type and
+    range, that a delivered carrier has a pickup time no later than its
+    delivery and a robot, that no run of a condition lists a carrier twice,
+    and that a run has one seed.
+
+    >>> nan = float("nan")
+    >>> log = CarrierLog(
+    ...     condition=["proximity", "proximity"], run=[0, 0], seed=[7, 7], carrier=[1, 2],
+    ...     urgency0=[9, 3], order_time=[-240.0, -80.0], pickup_time=[12.5, nan],
+    ...     delivery_time=[30.0, nan], robot=[0, -1], time_unit="s")
+    >>> log
+    CarrierLog(rows=2, conditions=('proximity',), time_unit='s')
+    >>> log.delivery_time
+    array([30., nan])
+    """
+
+    SCHEMA: ClassVar[tuple[ColumnSpec, ...]] = CARRIER_SCHEMA
+
+    condition: NDArray[np.str_]
+    run: NDArray[np.int64]
+    seed: NDArray[np.int64]
+    carrier: NDArray[np.int64]
+    urgency0: NDArray[np.int64]
+    order_time: NDArray[np.float64]
+    pickup_time: NDArray[np.float64]
+    delivery_time: NDArray[np.float64]
+    robot: NDArray[np.int64]
+    time_unit: str | None
+
+    def __init__(
+        self,
+        *,
+        condition: ArrayLike,
+        run: ArrayLike,
+        seed: ArrayLike,
+        carrier: ArrayLike,
+        urgency0: ArrayLike,
+        order_time: ArrayLike,
+        pickup_time: ArrayLike,
+        delivery_time: ArrayLike,
+        robot: ArrayLike,
+        time_unit: str | None = None,
+    ) -> None:
+        columns = {
+            "condition": condition,
+            "run": run,
+            "seed": seed,
+            "carrier": carrier,
+            "urgency0": urgency0,
+            "order_time": order_time,
+            "pickup_time": pickup_time,
+            "delivery_time": delivery_time,
+            "robot": robot,
+        }
+        self._set_columns(columns, time_unit, RowLocator())
+
+    @property
+    def conditions(self) -> tuple[str, ...]:
+        """The condition names present, in sorted order."""
+        return tuple(str(name) for name in np.unique(self.condition))
+
+    def sorted(self) -> CarrierLog:
+        """The same rows ordered by condition, run and carrier (a canonical order for files)."""
+        codes = np.unique(self.condition, return_inverse=True)[1]
+        return self.take(np.lexsort((self.carrier, self.run, codes)))
+
+    def _check_rows(self, loc: RowLocator) -> None:
+        delivered = ~np.isnan(self.delivery_time)
+        bad = np.flatnonzero(delivered & np.isnan(self.pickup_time))
+        if bad.size:
+            raise loc.error(
+                int(bad[0]),
+                "pickup_time",
+                "is empty but delivery_time is set; a delivered carrier was picked up first",
+            )
+        bad = np.flatnonzero(delivered & (self.delivery_time < self.pickup_time))
+        if bad.size:
+            i = int(bad[0])
+            raise loc.error(
+                i,
+                "delivery_time",
+                f"{float(self.delivery_time[i])!r} is before pickup_time "
+                f"{float(self.pickup_time[i])!r}",
+            )
+        bad = np.flatnonzero(delivered & (self.robot < 0))
+        if bad.size:
+            raise loc.error(
+                int(bad[0]), "robot", "is empty but the carrier was delivered; name the robot"
+            )
+        self._check_keys(loc)
+
+    def _check_keys(self, loc: RowLocator) -> None:
+        """No run of a condition lists a carrier twice, and each run has a single seed."""
+        if len(self) == 0:
+            return
+        names, codes = np.unique(self.condition, return_inverse=True)
+        order = np.lexsort((np.arange(len(self)), self.carrier, self.run, codes))
+        same_run = (codes[order][1:] == codes[order][:-1]) & (
+            self.run[order][1:] == self.run[order][:-1]
+        )
+        same_carrier = same_run & (self.carrier[order][1:] == self.carrier[order][:-1])
+        if same_carrier.any():
+            # Report the group whose repeat comes earliest in the table.
+            later = order[1:][same_carrier]
+            second = int(later.min())
+            key = (codes[second], self.run[second], self.carrier[second])
+            rows = np.flatnonzero(
+                (codes == key[0]) & (self.run == key[1]) & (self.carrier == key[2])
+            )
+            count = "two" if rows.size == 2 else str(rows.size)
+            raise loc.table_error(
+                f"run {int(key[1])} of {names[key[0]]} has {count} rows for carrier "
+                f"{int(key[2])} ({loc.where_many(rows.tolist())})"
+            )
+        other_seed = same_run & (self.seed[order][1:] != self.seed[order][:-1])
+        if other_seed.any():
+            position = int(np.flatnonzero(other_seed)[0])
+            first, second = int(order[position]), int(order[position + 1])
+            raise loc.error(
+                second,
+                "seed",
+                f"{int(self.seed[second])} differs from seed {int(self.seed[first])} on "
+                f"{loc.where(first)}, the same run ({int(self.run[second])} of "
+                f"{names[codes[second]]}); a run has one seed",
+            )
+
+
+@dataclass(frozen=True, eq=False, init=False, repr=False)
+class EventTable(_Columns):
+    """The optional long-format event table (SPEC §8.1): one row per event.
+
+    ``kind`` names the event (e.g. ``select``, ``abandon``, ``reprioritise``,
+    ``breakdown``); ``carrier`` and ``robot`` are ``MISSING_ID`` (-1) where
+    the event has none, ``value`` is NaN where it carries no number (for a
+    re-prioritisation it is the new urgency).
+
+    >>> EventTable(condition=["proximity"], seed=[0], run=[3], time=[12.0], kind=["select"],
+    ...     carrier=[5], robot=[1], value=[float("nan")], time_unit="tick")
+    EventTable(rows=1, conditions=('proximity',), time_unit='tick')
+    """
+
+    SCHEMA: ClassVar[tuple[ColumnSpec, ...]] = EVENT_SCHEMA
+
+    condition: NDArray[np.str_]
+    seed: NDArray[np.int64]
+    run: NDArray[np.int64]
+    time: NDArray[np.float64]
+    kind: NDArray[np.str_]
+    carrier: NDArray[np.int64]
+    robot: NDArray[np.int64]
+    value: NDArray[np.float64]
+    time_unit: str | None
+
+    def __init__(
+        self,
+        *,
+        condition: ArrayLike,
+        seed: ArrayLike,
+        run: ArrayLike,
+        time: ArrayLike,
+        kind: ArrayLike,
+        carrier: ArrayLike,
+        robot: ArrayLike,
+        value: ArrayLike,
+        time_unit: str | None = None,
+    ) -> None:
+        columns = {
+            "condition": condition,
+            "seed": seed,
+            "run": run,
+            "time": time,
+            "kind": kind,
+            "carrier": carrier,
+            "robot": robot,
+            "value": value,
+        }
+        self._set_columns(columns, time_unit, RowLocator())

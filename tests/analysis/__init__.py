@@ -1,0 +1,1 @@
+"""Tests of swarmtag.analysis: KPIs, bootstrap statistics, comparisons, curves."""

@@ -1,0 +1,185 @@
+"""Bootstrap over runs: exact intervals, re-pooling, undefined resamples, seeding, options."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from swarmtag.analysis import (
+    METRICS,
+    ConditionRuns,
+    condition_statistics,
+    percentile_interval,
+    run_values,
+)
+from swarmtag.analysis.resampling import condition_generator
+from swarmtag.errors import StatisticsError
+from swarmtag.io import CarrierLog
+from tests.io.strategies import carrier_logs, log_from_rows
+
+
+def _one_delivery_per_run(latencies: np.ndarray, name: str = "c") -> CarrierLog:
+    return log_from_rows([(name, run, 1, 5, 0.0, float(x)) for run, x in enumerate(latencies)])
+
+
+def test_ci_of_the_mean_matches_the_analytic_interval():
+    # 2000 runs, one delivery each: mean latency is the mean of a normal sample, whose 95 %
+    # interval is mean +- 1.96 s / sqrt(n). The bootstrap interval must agree within a few %.
+    latencies = np.random.default_rng(1).normal(100.0, 15.0, 2000)
+    runs = ConditionRuns.from_log(_one_delivery_per_run(latencies), "c")
+    ci = condition_statistics(runs, n_resamples=10_000, seed=4).mean_latency.confidence_interval
+    mean = latencies.mean()
+    half = 1.959964 * latencies.std(ddof=1) / math.sqrt(latencies.size)
+    assert ci.high - ci.low == pytest.approx(2 * half, rel=0.04)
+    assert (ci.low + ci.high) / 2 == pytest.approx(mean, abs=0.04 * half)
+
+
+def test_interval_is_numpys_2_5_and_97_5_percentiles_without_undefined():
+    values = np.random.default_rng(2).normal(size=1001)
+    with_gaps = np.concatenate([values, [np.nan, np.nan]])
+    ci = percentile_interval(with_gaps)
+    low, high = np.percentile(values, [2.5, 97.5])
+    assert (ci.low, ci.high) == (low, high)
+    ci90 = percentile_interval(values, confidence_level=0.9)
+    assert (ci90.low, ci90.high) == tuple(np.percentile(values, [5, 95]))
+
+
+def _reference_replicates(runs: ConditionRuns, n_resamples: int, seed: int) -> dict[str, list]:
+    """Slow and obvious: draw runs, concatenate them, compute each figure from scratch."""
+    rng = condition_generator(seed, runs.condition)
+    draws = rng.integers(0, runs.n_runs, size=(n_resamples, runs.n_runs))
+    latency = runs.delivery_time - runs.order_time
+    per_run = run_values(runs)
+    result: dict[str, list] = {metric: [] for metric in METRICS}
+    for drawn in draws:
+        pooled = np.concatenate(
+            [latency[(runs.run_index == run) & runs.delivered] for run in drawn]
+        )
+        throughputs = per_run.throughput[drawn]
+        throughputs = throughputs[~np.isnan(throughputs)]
+        result["p95_latency"].append(np.percentile(pooled, 95) if pooled.size else np.nan)
+        result["mean_latency"].append(np.mean(pooled) if pooled.size else np.nan)
+        result["throughput"].append(np.mean(throughputs) if throughputs.size else np.nan)
+        result["pa"].append(np.mean(per_run.pa[drawn]))
+        result["deliveries_per_run"].append(np.mean(per_run.deliveries[drawn]))
+    return result
+
+
+@settings(max_examples=25)
+@given(carrier_logs(conditions=("c",), max_runs=6), st.integers(0, 1000))
+def test_bootstrap_values_equal_the_slow_reference(log, seed):
+    runs = ConditionRuns.from_log(log, "c")
+    statistics = condition_statistics(runs, n_resamples=60, seed=seed)
+    reference = _reference_replicates(runs, 60, seed)
+    # P95 is exact to the bit; sums in another order may differ in the last bits.
+    np.testing.assert_array_equal(
+        statistics.p95_latency.bootstrap_distribution, reference["p95_latency"]
+    )
+    for metric in METRICS[1:]:
+        np.testing.assert_allclose(
+            statistics.estimate(metric).bootstrap_distribution,
+            reference[metric],
+            rtol=1e-12,
+            atol=1e-12,
+            err_msg=metric,
+        )
+
+
+def test_resamples_without_a_value_are_left_out():
+    # Five runs; only run 0 has deliveries (two of them, 10 time units apart).
+    rows = [("c", 0, 1, 5, 0.0, 10.0), ("c", 0, 2, 5, 0.0, 20.0)]
+    rows += [("c", run, 1, 5, 0.0, None) for run in range(1, 5)]
+    statistics = condition_statistics(
+        ConditionRuns.from_log(log_from_rows(rows), "c"), n_resamples=500, seed=1
+    )
+    for metric in ("p95_latency", "mean_latency", "throughput"):
+        estimate = statistics.estimate(metric)
+        distribution = estimate.bootstrap_distribution
+        # A resample without run 0 has no latency and no throughput: (4/5)^5 of them, ~33 %.
+        assert 100 < estimate.n_undefined < 240
+        assert estimate.n_undefined == int(np.isnan(distribution).sum())
+        defined = distribution[~np.isnan(distribution)]
+        ci = estimate.confidence_interval
+        assert (ci.low, ci.high) == tuple(np.percentile(defined, [2.5, 97.5]))
+    assert statistics.throughput.value == 20.0  # 100 * 2 / (20 - 10)
+    assert statistics.pa.n_undefined == 0
+    assert statistics.deliveries_per_run.n_undefined == 0
+
+
+def test_undefined_everywhere_gives_no_interval():
+    rows = [("c", run, 1, 5, 0.0, None) for run in range(3)]
+    statistics = condition_statistics(
+        ConditionRuns.from_log(log_from_rows(rows), "c"), n_resamples=50
+    )
+    for metric in ("p95_latency", "mean_latency", "throughput"):
+        estimate = statistics.estimate(metric)
+        assert estimate.value is None
+        assert (estimate.confidence_interval.low, estimate.confidence_interval.high) == (None, None)
+        assert estimate.n_undefined == 50
+    assert statistics.deliveries_per_run.confidence_interval.low == 0.0
+
+
+def test_same_seed_same_result_other_seed_other_result():
+    latencies = np.random.default_rng(0).exponential(50.0, 40)
+    runs = ConditionRuns.from_log(_one_delivery_per_run(latencies), "c")
+    first = condition_statistics(runs, n_resamples=300, seed=7)
+    again = condition_statistics(runs, n_resamples=300, seed=7)
+    other = condition_statistics(runs, n_resamples=300, seed=8)
+    for metric in METRICS:
+        np.testing.assert_array_equal(
+            first.estimate(metric).bootstrap_distribution,
+            again.estimate(metric).bootstrap_distribution,
+        )
+    assert not np.array_equal(
+        first.mean_latency.bootstrap_distribution, other.mean_latency.bootstrap_distribution
+    )
+
+
+def test_memory_chunking_does_not_change_results():
+    latencies = np.random.default_rng(5).exponential(50.0, 30)
+    runs = ConditionRuns.from_log(_one_delivery_per_run(latencies), "c")
+    whole = condition_statistics(runs, n_resamples=200, seed=3)
+    chunked = condition_statistics(runs, n_resamples=200, seed=3, _chunk_elements=64)
+    for metric in METRICS:
+        np.testing.assert_array_equal(
+            whole.estimate(metric).bootstrap_distribution,
+            chunked.estimate(metric).bootstrap_distribution,
+        )
+
+
+def test_bootstrap_values_are_read_only():
+    runs = ConditionRuns.from_log(_one_delivery_per_run(np.arange(1.0, 6.0)), "c")
+    distribution = condition_statistics(runs, n_resamples=10).pa.bootstrap_distribution
+    with pytest.raises(ValueError, match="read-only"):
+        distribution[0] = 1.0
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"n_resamples": 0}, "n_resamples"),
+        ({"n_resamples": 2.5}, "n_resamples"),
+        ({"seed": -1}, "seed"),
+        ({"confidence_level": 1.0}, "confidence_level"),
+        ({"confidence_level": 95}, "confidence_level"),
+        ({"curve_thresholds": [5, 101]}, "curve_thresholds"),
+        ({"curve_percentiles": [-1]}, "curve_percentiles"),
+    ],
+)
+def test_bad_options_are_refused(options, message):
+    runs = ConditionRuns.from_log(_one_delivery_per_run(np.arange(1.0, 6.0)), "c")
+    with pytest.raises(StatisticsError, match=message):
+        condition_statistics(runs, **options)
+
+
+def test_numpy_numbers_are_fine_options():
+    runs = ConditionRuns.from_log(_one_delivery_per_run(np.arange(1.0, 6.0)), "c")
+    plain = condition_statistics(runs, n_resamples=20, seed=2, confidence_level=0.9)
+    numpy = condition_statistics(
+        runs, n_resamples=np.int64(20), seed=np.uint32(2), confidence_level=np.float64(0.9)
+    )
+    assert numpy.pa.confidence_interval == plain.pa.confidence_interval
