@@ -68,3 +68,25 @@ def test_example_trial_is_a_plausible_physical_trial():
     assert (log.order_time <= 0).all()
     # Static urgency model: order time precedes the start by (u / 9) * 240 s (to 0.1 s).
     np.testing.assert_allclose(log.order_time, -log.urgency0 / 9 * 240, atol=0.051)
+
+
+def test_failed_write_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch):
+    from swarmtag.errors import EventLogError
+    from swarmtag.io import write_event_log
+    from swarmtag.io.csv_format import parse_carrier_csv
+
+    path = tmp_path / "events.csv"
+    path.write_text("old contents\n")
+    log = parse_carrier_csv(
+        "condition,run,seed,carrier,urgency0,order_time,pickup_time,delivery_time,robot\n"
+        "proximity,0,0,1,3,-2,1,4,0\n"
+    )
+
+    def refuse(self, target):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("pathlib.Path.replace", refuse)
+    with pytest.raises(EventLogError, match="cannot write"):
+        write_event_log(log, path)
+    assert path.read_text() == "old contents\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["events.csv"]

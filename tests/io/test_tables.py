@@ -161,3 +161,22 @@ def test_event_table():
         EventTable(**{**table.columns(), "kind": ["select", ""]})
     with pytest.raises(EventLogError, match="row 1, column time: nan is not a finite number"):
         EventTable(**{**table.columns(), "time": [NAN, 1.0]})
+
+
+def test_concat_keeps_rows_in_order_and_requires_one_time_unit():
+    from swarmtag.errors import EventLogError
+    from swarmtag.io import CarrierLog
+
+    def one(condition, unit):
+        return CarrierLog(
+            condition=[condition], run=[0], seed=[0], carrier=[1], urgency0=[3],
+            order_time=[-2.0], pickup_time=[1.0], delivery_time=[4.0], robot=[0], time_unit=unit,
+        )  # fmt: skip
+
+    joined = CarrierLog.concat([one("proximity", "tick"), one("urgency:alpha=0.7", "tick")])
+    assert joined.condition.tolist() == ["proximity", "urgency:alpha=0.7"]
+    assert joined.time_unit == "tick"
+    with pytest.raises(EventLogError, match="different time units"):
+        CarrierLog.concat([one("a", "tick"), one("b", "s")])
+    with pytest.raises(EventLogError, match="empty"):
+        CarrierLog.concat([])

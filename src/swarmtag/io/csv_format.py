@@ -27,6 +27,7 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._atomic import atomic_write_bytes
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
     MISSING_ID,
@@ -299,9 +300,8 @@ def format_csv(table: CarrierLog | EventTable) -> str:
 
 def write_csv(table: CarrierLog | EventTable, path: str | os.PathLike[str]) -> None:
     """Write a table as canonical CSV (UTF-8, LF line endings)."""
-    text = format_csv(table)
+    data = format_csv(table).encode("utf-8")
     try:
-        with Path(path).open("w", encoding="utf-8", newline="") as handle:
-            handle.write(text)
+        atomic_write_bytes(path, data)
     except OSError as error:
         raise EventLogError(f"{os.fspath(path)}: cannot write ({error.strerror})") from None

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._atomic import atomic_path
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
     MISSING_ID,
@@ -154,6 +155,7 @@ def write_parquet(table: CarrierLog | EventTable, path: str | os.PathLike[str]) 
     if table.time_unit is not None:
         arrays[TIME_UNIT_COLUMN] = pa.array([table.time_unit] * len(table), type=pa.string())
     try:
-        pq.write_table(pa.table(arrays), path)
+        with atomic_path(path) as temp:
+            pq.write_table(pa.table(arrays), temp)
     except OSError as error:
         raise EventLogError(f"{os.fspath(path)}: cannot write ({error})") from None

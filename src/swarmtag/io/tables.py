@@ -9,13 +9,14 @@ and by the file readers (with file and line numbers in their messages).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import ClassVar, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
     CARRIER_SCHEMA,
     EVENT_SCHEMA,
@@ -62,6 +63,21 @@ class _Columns:
         table = cls.__new__(cls)
         table._set_columns(columns, time_unit, loc)
         return table
+
+    @classmethod
+    def concat(cls, tables: Sequence[Self]) -> Self:
+        """The rows of ``tables`` one after the other; all must share one time unit."""
+        if not tables:
+            raise EventLogError(f"cannot concatenate an empty list of {cls.__name__} tables")
+        units = {table.time_unit for table in tables}
+        if len(units) > 1:
+            shown = ", ".join(sorted(repr(unit) for unit in units))
+            raise EventLogError(f"cannot concatenate tables with different time units: {shown}")
+        columns = {
+            spec.name: np.concatenate([getattr(table, spec.name) for table in tables])
+            for spec in cls.SCHEMA
+        }
+        return cls._build(columns, units.pop(), RowLocator())
 
     def columns(self) -> dict[str, NDArray[np.generic]]:
         """The columns in schema order, as read-only arrays."""

@@ -1,15 +1,15 @@
 """A tag store backed by a file, for software tags and bench setups.
 
-Writes go to a temporary file in the same folder, are flushed to disk and
-then renamed over the old record, so a crash leaves either the old record or
-the new one, never half of either.
+Writes replace the file atomically (temporary file, fsync, rename), so a
+crash leaves either the old record or the new one, never half of either.
 """
 
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
+
+from swarmtag._atomic import atomic_write_bytes
 
 __all__ = ["FileStore"]
 
@@ -28,22 +28,6 @@ class FileStore:
             return None
 
     def save(self, record: bytes) -> None:
-        """Write ``record`` atomically (temp file, fsync, rename, fsync of the folder)."""
-        folder = self.path.parent
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, temp = tempfile.mkstemp(prefix=f".{self.path.name}.", dir=folder)
-        try:
-            with os.fdopen(fd, "wb") as handle:
-                handle.write(record)
-                handle.flush()
-                os.fsync(handle.fileno())
-            Path(temp).replace(self.path)
-        except BaseException:
-            Path(temp).unlink(missing_ok=True)
-            raise
-        if hasattr(os, "O_DIRECTORY"):
-            dir_fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
-            try:
-                os.fsync(dir_fd)
-            finally:
-                os.close(dir_fd)
+        """Write ``record`` atomically, creating the store's folder on first use."""
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(self.path, record)
