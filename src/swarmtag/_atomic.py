@@ -8,7 +8,7 @@ rename it over the target, then flush the folder entry.
 from __future__ import annotations
 
 import os
-import tempfile
+import secrets
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -25,6 +25,17 @@ def _fsync_folder(folder: Path) -> None:
             os.close(fd)
 
 
+def _new_temp(folder: Path, name: str) -> Path:
+    """Create an empty, unique temporary file; unlike mkstemp it honours the umask (0o666)."""
+    while True:
+        temp = folder / f".{name}.{secrets.token_hex(6)}.tmp"
+        try:
+            os.close(os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+        except FileExistsError:  # pragma: no cover - 48 random bits
+            continue
+        return temp
+
+
 @contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path to write; on success it replaces ``path``, on error it is removed.
@@ -33,9 +44,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """
     target = Path(path)
     folder = target.parent
-    fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
-    os.close(fd)
-    temp = Path(name)
+    temp = _new_temp(folder, target.name)
     try:
         yield temp
         with temp.open("rb+") as handle:
