@@ -23,23 +23,31 @@ what to do instead.
     ├── StateRecordError (ValueError)       a persisted tag record is corrupt or unknown
     ├── PolicyError (ValueError)            bad policy parameter, condition name or inputs
     ├── EventLogError (ValueError)          an event log breaks the schema (names file, row, column)
-    └── StatisticsError (ValueError)        statistics input refused (no runs, unknown baseline)
+    ├── StatisticsError (ValueError)        statistics input refused (no runs, unknown baseline)
+    ├── ConfigError (ValueError)            a simulation scenario value or key is not allowed
+    └── SimulationError (RuntimeError)      a simulation broke one of its own contracts
+        ├── InvariantError                  a world-state invariant failed (checking mode)
+        └── DeterminismError                a run differed between two ways of computing it
 """
 
 from __future__ import annotations
 
 __all__ = [
+    "ConfigError",
+    "DeterminismError",
     "EventLogError",
     "FieldRangeError",
     "ForeignCompanyError",
     "ForgedWrite",
     "IllegalTransition",
+    "InvariantError",
     "MalformedWrite",
     "PayloadError",
     "PayloadLengthError",
     "PolicyError",
     "ReplayedWrite",
     "RoleNotAllowed",
+    "SimulationError",
     "StateRecordError",
     "StatisticsError",
     "SwarmtagError",
@@ -141,3 +149,19 @@ class EventLogError(SwarmtagError, ValueError):
 
 class StatisticsError(SwarmtagError, ValueError):
     """Metrics or statistics got input they cannot use (no runs, unknown baseline, bad option)."""
+
+
+class ConfigError(SwarmtagError, ValueError):
+    """A simulation scenario has a bad value or an unknown key; the message names the field."""
+
+
+class SimulationError(SwarmtagError, RuntimeError):
+    """The simulator broke one of its own contracts (a bug, never bad user input)."""
+
+
+class InvariantError(SimulationError):
+    """A world-state invariant failed in checking mode; the message names run, tick and rule."""
+
+
+class DeterminismError(SimulationError):
+    """A run gave different results alone, in a batch or in another process."""

@@ -10,6 +10,7 @@ import click
 from swarmtag import __version__
 from swarmtag.cli.demo import demo
 from swarmtag.cli.metrics import metrics
+from swarmtag.cli.simulate import simulate_cmd
 from swarmtag.cli.tag import tag
 from swarmtag.errors import SwarmtagError
 
@@ -30,6 +31,7 @@ def app() -> None:
 app.add_command(tag)
 app.add_command(demo)
 app.add_command(metrics)
+app.add_command(simulate_cmd)
 
 
 def _one_line(text: str) -> str:

@@ -1,0 +1,100 @@
+"""Checks for scenario fields: every refusal is a ``ConfigError`` naming the field and its range.
+
+Configuration arrives from TOML files, command-line flags and scripts, so
+values are checked at run time rather than trusted to annotations: integers
+must be integers (``3.0`` is refused, ``True`` is not a number), numbers may
+be written as integers, and every message says what was allowed.
+"""
+
+from __future__ import annotations
+
+import math
+from numbers import Integral, Real
+
+from swarmtag.errors import ConfigError
+
+__all__ = ["check_choice", "check_int", "check_number", "check_probability"]
+
+
+def _describe_number(low: float | None, high: float | None, *, low_open: bool) -> str:
+    if low is not None and high is not None:
+        left = "(" if low_open else "["
+        return f"a number in {left}{low:g}, {high:g}]"
+    if low is not None:
+        return f"a number {'>' if low_open else '>='} {low:g}"
+    return "a finite number"
+
+
+def check_number(
+    name: str,
+    value: object,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+) -> float:
+    """``value`` as a float if it is a finite real in the range, else ``ConfigError``.
+
+    >>> check_number("arena.size", 4, low=0.0, low_open=True)
+    4.0
+    >>> check_number("arena.size", -1.0, low=0.0, low_open=True)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: arena.size: -1.0 is not a number > 0
+    """
+    allowed = _describe_number(low, high, low_open=low_open)
+    if isinstance(value, bool) or not isinstance(value, Real):
+        msg = f"{name}: {value!r} is not {allowed}"
+        raise ConfigError(msg)
+    number = float(value)
+    ok = math.isfinite(number)
+    if ok and low is not None:
+        ok = number > low if low_open else number >= low
+    if ok and high is not None:
+        ok = number <= high
+    if not ok:
+        msg = f"{name}: {value!r} is not {allowed}"
+        raise ConfigError(msg)
+    return number + 0.0  # -0.0 becomes 0.0
+
+
+def check_probability(name: str, value: object) -> float:
+    """A probability in [0, 1].
+
+    >>> check_probability("realism.breakdown", 1.5)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: realism.breakdown: 1.5 is not a number in [0, 1]
+    """
+    return check_number(name, value, low=0.0, high=1.0)
+
+
+def check_int(name: str, value: object, *, low: int, high: int | None = None) -> int:
+    """``value`` as an int if it is an integer in ``low..high``, else ``ConfigError``.
+
+    >>> check_int("robots", 0, low=1)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: robots: 0 is not an integer >= 1
+    """
+    allowed = f"an integer >= {low}" if high is None else f"an integer in {low}-{high}"
+    if isinstance(value, bool) or not isinstance(value, Integral):
+        msg = f"{name}: {value!r} is not {allowed}"
+        raise ConfigError(msg)
+    number = int(value)
+    if number < low or (high is not None and number > high):
+        msg = f"{name}: {value!r} is not {allowed}"
+        raise ConfigError(msg)
+    return number
+
+
+def check_choice(name: str, value: object, choices: tuple[str, ...]) -> str:
+    """``value`` if it is one of ``choices`` (case-insensitive), in its canonical spelling.
+
+    >>> check_choice("urgency.model", "Static", ("growing", "static"))
+    'static'
+    """
+    if isinstance(value, str) and value.strip().lower() in choices:
+        return value.strip().lower()
+    msg = f"{name}: {value!r} is not one of {', '.join(choices)}"
+    raise ConfigError(msg)

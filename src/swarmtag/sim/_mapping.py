@@ -1,0 +1,157 @@
+"""Scenarios to and from plain mappings and TOML files, with overrides.
+
+The mapping mirrors the dataclasses: top-level keys (``robots``,
+``carriers``, ``ticks``, ``tick``, ``detection_radius``), one table per part
+(``[arena]``, ``[bodies]``, ``[motion]``, ``[timing]``, ``[urgency]``,
+``[realism]``) and an array of tables ``[[reprioritisations]]``. Overrides
+are merged on top (nested tables or dotted keys such as ``"arena.size"``);
+parts not given take the defaults, the arena scaled for the carrier count.
+Unknown keys are errors that name the key and list the known ones.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from collections.abc import Iterable, Mapping
+from dataclasses import asdict, fields
+from pathlib import Path
+from typing import Any, Final
+
+from swarmtag.errors import ConfigError
+from swarmtag.sim._fields import check_int
+from swarmtag.sim.groups import (
+    LAB_CARRIERS,
+    Arena,
+    Bodies,
+    Motion,
+    Realism,
+    Reprioritisation,
+    Timing,
+    UrgencyModel,
+)
+
+__all__ = ["load_toml", "scenario_fields", "scenario_to_mapping"]
+
+_PARTS: Final[dict[str, type[Any]]] = {
+    "arena": Arena,
+    "bodies": Bodies,
+    "motion": Motion,
+    "timing": Timing,
+    "urgency": UrgencyModel,
+    "realism": Realism,
+}
+_SCALARS: Final = ("robots", "carriers", "ticks", "tick", "detection_radius")
+_EVENTS: Final = "reprioritisations"
+
+
+def _known(names: Iterable[str]) -> str:
+    return ", ".join(sorted(names))
+
+
+def _merge(base: dict[str, Any], extra: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """``base`` with ``extra`` merged in: tables merge key by key, dotted keys nest."""
+    merged = dict(base)
+    for key, given in extra.items():
+        name: object = key  # keys come from files and scripts
+        if not isinstance(name, str):
+            msg = f"{where}{name!r}: keys must be strings"
+            raise ConfigError(msg)
+        head, dot, tail = name.partition(".")
+        value = {tail: given} if dot else given
+        if isinstance(value, Mapping) and isinstance(merged.get(head), Mapping):
+            merged[head] = _merge(dict(merged[head]), value, f"{where}{head}.")
+        elif isinstance(value, Mapping):
+            merged[head] = _merge({}, value, f"{where}{head}.")
+        else:
+            merged[head] = value
+    return merged
+
+
+def _part(name: str, kind: type[Any], given: object, defaults: dict[str, Any]) -> object:
+    if not isinstance(given, Mapping):
+        msg = f"{name}: {given!r} is not a table of keys ({_known(f.name for f in fields(kind))})"
+        raise ConfigError(msg)
+    allowed = {f.name for f in fields(kind)}
+    for key in given:
+        if key not in allowed:
+            msg = f"{name}.{key}: unknown key; [{name}] has keys {_known(allowed)}"
+            raise ConfigError(msg)
+    return kind(**{**defaults, **given})
+
+
+def _events(given: object) -> tuple[Reprioritisation, ...]:
+    if not isinstance(given, list | tuple):
+        msg = f"{_EVENTS}: {given!r} is not a list of tables with keys carrier, tick, urgency"
+        raise ConfigError(msg)
+    events = []
+    required = {f.name for f in fields(Reprioritisation)}
+    for number, item in enumerate(given, start=1):
+        if isinstance(item, Reprioritisation):
+            events.append(item)
+            continue
+        if not isinstance(item, Mapping):
+            msg = f"{_EVENTS}[{number}]: {item!r} is not a table with keys carrier, tick, urgency"
+            raise ConfigError(msg)
+        unknown = set(item) - required
+        if unknown:
+            msg = f"{_EVENTS}[{number}].{min(unknown)}: unknown key; use {_known(required)}"
+            raise ConfigError(msg)
+        missing = required - set(item)
+        if missing:
+            msg = f"{_EVENTS}[{number}]: lacks {_known(missing)}"
+            raise ConfigError(msg)
+        events.append(Reprioritisation(**item))
+    return tuple(events)
+
+
+def scenario_fields(
+    data: Mapping[str, Any], overrides: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
+    """Keyword arguments for ``Scenario`` from a mapping and optional overrides."""
+    checked: object = data  # mappings come from files and scripts
+    if not isinstance(checked, Mapping):
+        msg = f"scenario: {checked!r} is not a mapping of keys"
+        raise ConfigError(msg)
+    merged = _merge(_merge({}, data, ""), overrides or {}, "")
+    allowed = {*_SCALARS, *_PARTS, _EVENTS}
+    for key in merged:
+        if key not in allowed:
+            msg = f"{key}: unknown key; a scenario has keys {_known(allowed)}"
+            raise ConfigError(msg)
+    kwargs: dict[str, Any] = {name: merged[name] for name in _SCALARS if name in merged}
+    carriers = check_int("carriers", merged.get("carriers", LAB_CARRIERS), low=1)
+    for name, kind in _PARTS.items():
+        if name in merged:
+            defaults = asdict(Arena.scaled(carriers)) if kind is Arena else asdict(kind())
+            kwargs[name] = _part(name, kind, merged[name], defaults)
+    if _EVENTS in merged:
+        kwargs[_EVENTS] = _events(merged[_EVENTS])
+    return kwargs
+
+
+def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The table of a TOML file; unreadable files and syntax errors are ``ConfigError``."""
+    try:
+        with Path(path).open("rb") as handle:
+            return tomllib.load(handle)
+    except FileNotFoundError:
+        msg = f"{os.fspath(path)}: no such scenario file"
+        raise ConfigError(msg) from None
+    except OSError as error:
+        msg = f"{os.fspath(path)}: cannot read ({error.strerror})"
+        raise ConfigError(msg) from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        msg = f"{os.fspath(path)}: not valid TOML ({error})"
+        raise ConfigError(msg) from None
+
+
+def scenario_to_mapping(values: Mapping[str, Any]) -> dict[str, Any]:
+    """Plain nested values (tables as dicts, events as a list of dicts), TOML/JSON-ready."""
+    result: dict[str, Any] = {}
+    for name in _SCALARS:
+        result[name] = values[name]
+    for name in _PARTS:
+        result[name] = asdict(values[name])
+    result[_EVENTS] = [asdict(event) for event in values[_EVENTS]]
+    return result

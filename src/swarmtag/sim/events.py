@@ -1,0 +1,156 @@
+"""What happened in a tick, and the long-format event table built from it (SPEC §8.1).
+
+Event kinds (the ``kind`` column), in the order they can happen in a tick:
+
+=================  ==========================================================
+``breakdown``      a robot broke down; ``carrier`` is the one it held (stuck) or empty
+``abandon``        a robot gave up its pursuit: it heard the target is no longer
+                   AWAITING_PICKUP; ``value`` = the status it heard
+``timeout``        a pursuit reached the timeout; the cool-down starts
+``select``         a robot chose a carrier; ``value`` = the urgency it heard
+``lift``           a robot lifted a carrier (tag -> PICKED_UP); ``value`` = urgency
+``lift_refused``   a robot centred under a carrier could not lift it (another,
+                   smaller-id robot lifted it this tick, or the tag refused the
+                   write); ``value`` = the tag's status
+``deliver``        a robot put a carrier down in the drop-off area (tag -> IDLE);
+                   ``value`` = urgency
+``reprioritise``   an operator write set a carrier's urgency; ``value`` = the new
+                   urgency; ``robot`` is empty
+=================  ==========================================================
+
+Rows are sorted by run, time, kind (the order above), robot, carrier, so a
+run's rows do not depend on the batch it was computed in.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag.io import MISSING_ID, EventTable
+from swarmtag.sim.geometry import Float
+from swarmtag.sim.state import Int
+
+__all__ = ["EventKind", "EventRecorder", "TickEvents"]
+
+
+class EventKind(IntEnum):
+    """Event kinds; the number is the order within a tick (the phase they happen in)."""
+
+    BREAKDOWN = 1
+    ABANDON = 2
+    TIMEOUT = 3
+    SELECT = 4
+    LIFT = 5
+    LIFT_REFUSED = 6
+    DELIVER = 7
+    REPRIORITISE = 8
+
+    @property
+    def label(self) -> str:
+        """The name written in the ``kind`` column, e.g. ``lift_refused``."""
+        return self.name.lower()
+
+
+@dataclass(frozen=True, eq=False)
+class RobotEvents:
+    """Robots (``mask``, shape (R, N)) to which one kind of event happened this tick."""
+
+    kind: EventKind
+    mask: NDArray[np.bool_]
+    carrier: Int
+    value: Float
+
+
+@dataclass(eq=False)
+class TickEvents:
+    """The events of one tick, collected by the kernel phases in phase order."""
+
+    entries: list[RobotEvents] = field(default_factory=list)
+
+    def add(self, kind: EventKind, mask: NDArray[np.bool_], carrier: Int, value: Float) -> None:
+        """Record ``kind`` for the robots in ``mask`` (copies are kept)."""
+        if mask.any():
+            self.entries.append(RobotEvents(kind, mask.copy(), carrier.copy(), value.copy()))
+
+    def masked(self, keep: NDArray[np.bool_]) -> TickEvents:
+        """The same events restricted to the runs where ``keep`` (shape (R,)) is true."""
+        return TickEvents(
+            [
+                RobotEvents(e.kind, e.mask & keep[:, None], e.carrier, e.value)
+                for e in self.entries
+                if (e.mask & keep[:, None]).any()
+            ]
+        )
+
+    def count(self, kind: EventKind, runs: int) -> NDArray[np.int64]:
+        """Events of ``kind`` per run this tick, for a batch of ``runs`` runs."""
+        total = np.zeros(runs, dtype=np.int64)
+        for entry in self.entries:
+            if entry.kind is kind:
+                total += entry.mask.sum(axis=1, dtype=np.int64)
+        return total
+
+
+class EventRecorder:
+    """Accumulates event rows tick by tick and builds the ``EventTable`` at the end."""
+
+    def __init__(self) -> None:
+        self._rows: list[tuple[Int, Int, Int, Int, Int, Float]] = []
+
+    def add_tick(self, tick: int, events: TickEvents) -> None:
+        """Rows for every robot event of ``tick``."""
+        for entry in events.entries:
+            runs, robots = np.nonzero(entry.mask)
+            self._rows.append(
+                (
+                    runs,
+                    np.full(runs.shape, tick, dtype=np.int64),
+                    np.full(runs.shape, int(entry.kind), dtype=np.int64),
+                    entry.carrier[runs, robots],
+                    robots.astype(np.int64),
+                    entry.value[runs, robots],
+                )
+            )
+
+    def add_carrier_event(
+        self, tick: int, kind: EventKind, run: int, carrier: int, value: float
+    ) -> None:
+        """One row without a robot (operator writes)."""
+        self._rows.append(
+            (
+                np.array([run]),
+                np.array([tick]),
+                np.array([int(kind)]),
+                np.array([carrier]),
+                np.array([MISSING_ID]),
+                np.array([value]),
+            )
+        )
+
+    def table(self, *, condition: str, seed: int, run_ids: Int) -> EventTable:
+        """The sorted event table; ``run_ids`` maps batch positions to global run ids."""
+        if self._rows:
+            runs, ticks, kinds, carriers, robots, values = (
+                np.concatenate(column) for column in zip(*self._rows, strict=True)
+            )
+        else:
+            runs = ticks = kinds = carriers = robots = np.zeros(0, dtype=np.int64)
+            values = np.zeros(0)
+        global_runs = run_ids[runs]
+        order = np.lexsort((carriers, robots, kinds, ticks, global_runs))
+        labels = np.array([EventKind(k).label for k in kinds[order].tolist()], dtype=str)
+        return EventTable(
+            condition=np.full(order.shape, condition),
+            seed=np.full(order.shape, seed, dtype=np.int64),
+            run=global_runs[order],
+            time=ticks[order].astype(np.float64),
+            kind=labels if labels.size else np.zeros(0, dtype=str),
+            carrier=carriers[order],
+            robot=robots[order],
+            value=values[order],
+            time_unit="tick",
+        )

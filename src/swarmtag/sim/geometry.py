@@ -1,0 +1,163 @@
+"""Pure batched 2-D geometry for the kernel: lengths, steps, turns, contacts, walls.
+
+Vectors are arrays whose last axis has length 2 (x, y); every function works
+elementwise over any leading axes (runs, robots, carriers ...). The floating
+point is written down so that other backends can match it bit for bit: a
+length is ``sqrt(x*x + y*y)`` (never ``hypot``), no sin/cos/atan2 appear
+(turns use a precomputed cosine and sine of the largest turn per tick), and
+sums over bodies run in index order (``ordered_sum``), never pairwise.
+
+Bodies are *rounded boxes*: an axis-aligned square of half-side ``extent``
+grown by a disc of ``radius``. A robot is ``(0, r)``, a carrier or a loaded
+robot ``(h, 0)``. Two rounded boxes touch like one point against the box of
+half-side ``extent_a + extent_b`` grown by ``radius_a + radius_b``, so one
+formula (``contact_push``) covers disc-disc, disc-square and square-square.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "FACE_NORMALS",
+    "Float",
+    "clamp_to_box",
+    "contact_push",
+    "contact_xy",
+    "length",
+    "ordered_sum",
+    "step_towards",
+    "turn_towards",
+]
+
+Float = NDArray[np.float64]
+
+FACE_NORMALS: Final = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+"""Outward normals of a carrier's faces, in face order: east, north, west, south."""
+FACE_NORMALS.flags.writeable = False
+
+
+def length(v: Float) -> Float:
+    """``sqrt(x*x + y*y)`` over the last axis.
+
+    >>> length(np.array([[3.0, 4.0], [0.0, 0.0]]))
+    array([5., 0.])
+    """
+    x, y = v[..., 0], v[..., 1]
+    return np.sqrt(x * x + y * y)
+
+
+def ordered_sum(values: Float, axis: int) -> Float:
+    """Sum along ``axis`` strictly left to right (``cumsum``'s order), whatever the layout.
+
+    >>> ordered_sum(np.array([[1e16, 1.0, -1e16]]), axis=1)
+    array([0.])
+    """
+    if values.shape[axis] == 0:
+        return np.zeros(np.delete(values.shape, axis), dtype=np.float64)
+    total: Float = np.take(np.cumsum(values, axis=axis), -1, axis=axis)
+    return total
+
+
+def step_towards(position: Float, goal: Float, step: Float) -> Float:
+    """Move up to ``step`` along the straight line to ``goal``; land exactly on it if closer.
+
+    ``step`` has the leading shape (one length per body).
+
+    >>> step_towards(np.array([[0.0, 0.0]]), np.array([[3.0, 4.0]]), np.array([1.0]))
+    array([[0.6, 0.8]])
+    >>> step_towards(np.array([[0.0, 0.0]]), np.array([[0.3, 0.4]]), np.array([1.0]))
+    array([[0.3, 0.4]])
+    """
+    offset = goal - position
+    distance = length(offset)
+    scale = np.divide(step, distance, out=np.zeros_like(distance), where=distance > 0)
+    moved = position + offset * scale[..., None]
+    return np.where((distance <= step)[..., None], goal, moved)
+
+
+def turn_towards(heading: Float, target: Float, cos_step: float, sin_step: float) -> Float:
+    """Turn unit ``heading`` towards unit ``target`` by at most the angle of (cos, sin).
+
+    Within one step the heading becomes ``target`` exactly; otherwise it
+    rotates by the full step (counter-clockwise when ``target`` is straight
+    behind) and is renormalised.
+
+    >>> turn_towards(np.array([1.0, 0.0]), np.array([0.0, 1.0]), 0.0, 1.0)
+    array([0., 1.])
+    >>> turn_towards(np.array([1.0, 0.0]), np.array([-1.0, 0.0]), 0.0, 1.0)
+    array([0., 1.])
+    """
+    hx, hy = heading[..., 0], heading[..., 1]
+    tx, ty = target[..., 0], target[..., 1]
+    dot = hx * tx + hy * ty
+    cross = hx * ty - hy * tx
+    sin = np.where(cross < 0, -sin_step, sin_step)
+    rx = hx * cos_step - hy * sin
+    ry = hx * sin + hy * cos_step
+    norm = np.sqrt(rx * rx + ry * ry)
+    turned = np.stack((rx / norm, ry / norm), axis=-1)
+    return np.where((dot >= cos_step)[..., None], target, turned)
+
+
+def contact_xy(
+    dx: Float, dy: Float, extent: Float, radius: Float, tie: Float | float
+) -> tuple[Float, Float, Float]:
+    """``contact_push`` on separate x and y arrays: returns push x, push y and depth."""
+    nearest_x = np.minimum(np.maximum(dx, -extent), extent)
+    nearest_y = np.minimum(np.maximum(dy, -extent), extent)
+    out_x = dx - nearest_x
+    out_y = dy - nearest_y
+    distance = np.sqrt(out_x * out_x + out_y * out_y)
+    outside = distance > 0
+    depth_outside = radius - distance
+    scale = np.divide(depth_outside, distance, out=np.zeros_like(distance), where=outside)
+
+    overlap_x = extent + radius - np.abs(dx)
+    overlap_y = extent + radius - np.abs(dy)
+    along_x = overlap_x <= overlap_y
+    sign_x = np.where(dx > 0, 1.0, np.where(dx < 0, -1.0, tie))
+    sign_y = np.where(dy > 0, 1.0, np.where(dy < 0, -1.0, tie))
+
+    depth = np.where(outside, depth_outside, np.where(along_x, overlap_x, overlap_y))
+    hit = depth > 0
+    push_x = np.where(outside, out_x * scale, np.where(along_x, sign_x * overlap_x, 0.0))
+    push_y = np.where(outside, out_y * scale, np.where(along_x, 0.0, sign_y * overlap_y))
+    return np.where(hit, push_x, 0.0), np.where(hit, push_y, 0.0), depth
+
+
+def contact_push(
+    offset: Float, extent: Float, radius: Float, tie: Float | float
+) -> tuple[Float, Float]:
+    """How far body A must move to stop overlapping body B, and the overlap depth.
+
+    ``offset`` is A's centre minus B's (last axis x, y); ``extent`` and
+    ``radius`` are the summed half-sides and radii of the two rounded boxes.
+    Outside the summed box the push is along the line from its nearest point,
+    ``outward * ((radius - d) / d)``; inside (centres closer than the box) it
+    is along the axis of least overlap (x on a tie), in the direction of the
+    offset (``tie``, +1 or -1, where that component is 0). The push is zero
+    where the depth is not positive.
+
+    >>> push, depth = contact_push(np.array([0.2, 0.0]), np.array(0.0), np.array(0.25), 1.0)
+    >>> push.round(12), depth.round(12)
+    (array([0.05, 0.  ]), np.float64(0.05))
+    >>> push, depth = contact_push(np.array([0.0, 0.3]), np.array(0.355), np.array(0.0), 1.0)
+    >>> push.round(12), depth.round(12)
+    (array([0.   , 0.055]), np.float64(0.055))
+    """
+    push_x, push_y, depth = contact_xy(offset[..., 0], offset[..., 1], extent, radius, tie)
+    return np.stack((push_x, push_y), axis=-1), depth
+
+
+def clamp_to_box(position: Float, margin: Float, size: float) -> Float:
+    """Keep a body whose half-size is ``margin`` inside the square ``[0, size]^2``.
+
+    >>> clamp_to_box(np.array([[0.05, 3.9]]), np.array([0.125]), 3.75)
+    array([[0.125, 3.625]])
+    """
+    low = margin[..., None]
+    return np.minimum(np.maximum(position, low), size - low)

@@ -1,0 +1,76 @@
+"""The step kernel: one tick of a batch of runs, a pure function of (state, inputs, params).
+
+``step`` runs the phases of SPEC §4.5 in order: sense (``sense``) -> decide
+(``decide``) -> move and resolve collisions (``motion``) -> dock / lift /
+release (``docking``) -> end of tick (tags' urgency growth, the advertised
+state history, run ends). It returns the next state and the tick's events;
+the state it is given is left untouched. Operator writes (re-prioritisations)
+are applied by the caller after ``step`` (``swarmtag.sim.wms``), as the
+last thing in the tick.
+
+A run that has ended (every carrier delivered, or its time limit) is frozen:
+its state no longer changes and it records no events.
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields, replace
+from typing import Any
+
+import numpy as np
+
+from swarmtag.sim.decide import decide
+from swarmtag.sim.docking import handle
+from swarmtag.sim.events import TickEvents
+from swarmtag.sim.motion import move, resolve
+from swarmtag.sim.params import Params
+from swarmtag.sim.randomness import TickInputs
+from swarmtag.sim.sense import sense
+from swarmtag.sim.state import WorldState
+from swarmtag.sim.urgency import growing_urgency
+
+__all__ = ["step"]
+
+
+def _end_of_tick(s: WorldState, params: Params, t: int) -> None:
+    """Grow urgencies, record what the tags advertise, and mark runs that end now."""
+    growing = ~np.isnan(s.w0)
+    if growing.any():
+        grown = growing_urgency(np.where(growing, s.w0, 0.0), t, params.horizon)
+        np.copyto(s.urgency, grown, where=growing)
+    slot = t % (params.status_delay + 1)
+    s.adv_status[:, slot] = s.status
+    s.adv_urgency[:, slot] = s.urgency
+    ends = (s.ended_at < 0) & ((~s.present).all(axis=1) | (t >= params.run_ticks))
+    s.ended_at[ends] = t
+
+
+def _freeze(before: WorldState, after: WorldState, frozen: np.ndarray) -> WorldState:
+    """``after`` with the runs in ``frozen`` (R,) put back to ``before``."""
+    changes: dict[str, Any] = {}
+    for f in fields(after):
+        new = getattr(after, f.name)
+        if isinstance(new, np.ndarray) and f.name != "run_ids":
+            old = getattr(before, f.name)
+            mask = frozen.reshape((-1,) + (1,) * (new.ndim - 1))
+            changes[f.name] = np.where(mask, old, new)
+    return replace(after, **changes)
+
+
+def step(state: WorldState, inputs: TickInputs, params: Params) -> tuple[WorldState, TickEvents]:
+    """The state after one more tick, and what happened in it."""
+    t = state.tick + 1
+    senses = sense(state, inputs, params)
+    s = replace(
+        state.copy(), tick=t, known_status=senses.known_status, known_urgency=senses.known_urgency
+    )
+    events = TickEvents()
+    decide(state, s, senses=senses, inputs=inputs, params=params, t=t, events=events)
+    proposed = move(s, params)
+    resolve(s, state.robot_pos, proposed, params)
+    handle(s, params, t, events)
+    _end_of_tick(s, params, t)
+    ended = state.ended_at >= 0
+    if ended.any():
+        return _freeze(state, s, ended), events.masked(~ended)
+    return s, events

@@ -1,0 +1,140 @@
+"""Kernel parameters: the scenario and the policy in the kernel's units, frozen.
+
+The kernel never sees seconds or degrees: durations are whole ticks, speeds
+metres per tick, and the largest turn per tick is given as its cosine and
+sine, computed here once (``math.cos``/``math.sin``, outside any kernel).
+Other backends and the behaviour tree must take these numbers from
+``Params`` rather than recompute them, so that they match bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag.errors import ConfigError
+from swarmtag.policy import Policy
+from swarmtag.sim.groups import seconds_to_ticks
+from swarmtag.sim.scenario import Scenario
+
+__all__ = ["Params", "make_params"]
+
+
+@dataclass(frozen=True, eq=False)
+class Params:
+    """Everything the step kernel needs besides the state and the tick's random inputs.
+
+    Lengths are metres, times ticks. The arena is ``[0, arena]^2``; the
+    pick-up area is ``x <= pickup_right``, the drop-off area (destination 0)
+    ``x >= dropoff_left``.
+    """
+
+    scenario: Scenario
+    policy: Policy
+    robots: int
+    carriers: int
+    arena: float
+    pickup_right: float
+    dropoff_left: float
+    robot_radius: float
+    carrier_half: float
+    carrier_spacing: float
+    step: float
+    """Nominal distance a robot drives in one tick (speed times tick)."""
+    turn_cos: float
+    turn_sin: float
+    """Cosine and sine of the largest turn in one tick."""
+    detection_radius: float
+    predock_offset: float
+    """Carrier centre to predock point: half the carrier side plus the predock distance."""
+    arrival_tolerance: float
+    """Metres within which a robot counts as standing on its predock point or carrier centre."""
+    transport_x: float
+    """x of a transport goal: the middle of the drop-off area."""
+    dock_ticks: int
+    lift_ticks: int
+    release_ticks: int
+    timeout_ticks: int
+    cooldown_ticks: int
+    stuck_ticks: int
+    sidestep_ticks: int
+    collision_iterations: int
+    run_ticks: int
+    growing: bool
+    horizon: float
+    """Growing model: T, the run length in ticks. Static model: the horizon in ticks."""
+    advertisement_loss: float
+    status_delay: int
+    detection_noise: float
+    speed_variation: float
+    breakdown: float
+    markers: NDArray[np.int64]
+    """Marker id of each carrier (its index)."""
+
+    @property
+    def condition(self) -> str:
+        """The policy's canonical condition name (SPEC §8.1)."""
+        return self.policy.name
+
+
+def make_params(scenario: Scenario, policy: Policy) -> Params:
+    """Kernel parameters for ``scenario`` under ``policy``.
+
+    >>> from swarmtag.policy import Proximity
+    >>> p = make_params(Scenario.default(), Proximity())
+    >>> p.step, p.dock_ticks, p.timeout_ticks, round(p.turn_cos, 6)
+    (0.05, 10, 300, 0.987688)
+    """
+    checked: object = policy
+    if not isinstance(checked, Policy):
+        msg = f"policy: {checked!r} is not a Policy; use swarmtag.policy.parse_policy(name)"
+        raise ConfigError(msg)
+    tick = scenario.tick
+    arena, bodies, motion, timing = scenario.area, scenario.bodies, scenario.motion, scenario.timing
+    turn = math.radians(min(motion.turn_rate * tick, 180.0))
+    timeout = seconds_to_ticks(timing.pursuit_timeout, tick)
+    if timeout < 1:
+        msg = f"timing.pursuit_timeout: {timing.pursuit_timeout!r} s is shorter than one tick"
+        raise ConfigError(msg)
+    markers = np.arange(scenario.carriers, dtype=np.int64)
+    markers.flags.writeable = False
+    growing = scenario.urgency.model == "growing"
+    return Params(
+        scenario=scenario,
+        policy=policy,
+        robots=scenario.robots,
+        carriers=scenario.carriers,
+        arena=arena.size,
+        pickup_right=arena.pickup_width,
+        dropoff_left=arena.size - arena.dropoff_width,
+        robot_radius=bodies.robot_diameter / 2,
+        carrier_half=bodies.carrier_size / 2,
+        carrier_spacing=arena.carrier_spacing,
+        step=motion.speed * tick,
+        turn_cos=math.cos(turn),
+        turn_sin=math.sin(turn),
+        detection_radius=scenario.detection_radius,
+        predock_offset=bodies.carrier_size / 2 + motion.predock_distance,
+        arrival_tolerance=motion.arrival_tolerance,
+        transport_x=arena.size - arena.dropoff_width / 2,
+        dock_ticks=seconds_to_ticks(timing.dock, tick),
+        lift_ticks=seconds_to_ticks(timing.lift, tick),
+        release_ticks=seconds_to_ticks(timing.release, tick),
+        timeout_ticks=timeout,
+        cooldown_ticks=seconds_to_ticks(timing.cooldown, tick),
+        stuck_ticks=max(1, seconds_to_ticks(motion.stuck_time, tick)),
+        sidestep_ticks=max(1, seconds_to_ticks(motion.sidestep_time, tick)),
+        collision_iterations=motion.collision_iterations,
+        run_ticks=scenario.run_ticks,
+        growing=growing,
+        horizon=float(scenario.ticks) if growing else scenario.urgency.static_horizon / tick,
+        advertisement_loss=scenario.realism.advertisement_loss,
+        status_delay=scenario.realism.status_delay,
+        detection_noise=scenario.realism.detection_noise,
+        speed_variation=scenario.realism.speed_variation,
+        breakdown=scenario.realism.breakdown,
+        markers=markers,
+    )

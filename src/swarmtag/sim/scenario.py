@@ -1,0 +1,225 @@
+"""The simulation scenario: typed, frozen, validated configuration (SPEC §4.1, §4.3).
+
+A ``Scenario`` says everything about the world a run happens in, except the
+policy and the seed: arena and zones, bodies, motion, behaviour timings,
+urgency model, scheduled re-prioritisations and the optional realism. Build
+it from keywords, ``Scenario.default(robots, carriers)``, a mapping
+(``from_mapping``) or a TOML file (``from_toml``). Bad values raise
+``ConfigError`` naming the field and the allowed range.
+
+Larger swarms: unless an ``arena`` is given, its side and both zone widths
+scale with ``sqrt(carriers / 7)`` (never below 1) so that carrier density
+(carriers per square metre of arena and of pick-up area) stays that of the
+3 / 7 lab set-up.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any, Final
+
+from swarmtag.errors import ConfigError
+from swarmtag.sim._fields import check_int, check_number
+from swarmtag.sim._mapping import load_toml, scenario_fields, scenario_to_mapping
+from swarmtag.sim.groups import (
+    Arena,
+    Bodies,
+    Motion,
+    Realism,
+    Reprioritisation,
+    Timing,
+    UrgencyModel,
+)
+
+__all__ = ["MAX_CARRIERS", "Scenario"]
+
+MAX_CARRIERS: Final = 256
+"""Marker ids are one byte on the wire (SPEC §2.1): carriers are numbered 0-255."""
+
+
+def _grid_capacity(width: float, height: float, body: float, pitch: float) -> int:
+    """How many bodies of size ``body`` fit on a grid of ``pitch`` in a ``width x height`` box."""
+    if width < body or height < body:
+        return 0
+    return (math.floor((width - body) / pitch) + 1) * (math.floor((height - body) / pitch) + 1)
+
+
+@dataclass(frozen=True, slots=True)
+class Scenario:
+    """Everything about the simulated world except policy and seed.
+
+    ``ticks`` is the run length T of the growing model; static runs end when
+    every carrier is delivered or at ``urgency.static_time_limit``. ``arena``
+    defaults to the lab arena scaled for ``carriers`` (see the module docs).
+
+    >>> s = Scenario.default()
+    >>> s.robots, s.carriers, s.arena.size, s.tick, s.run_ticks
+    (3, 7, 3.75, 0.1, 3000)
+    >>> Scenario(robots=0)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: robots: 0 is not an integer >= 1
+    """
+
+    robots: int = 3
+    carriers: int = 7
+    ticks: int = 3000
+    tick: float = 0.1
+    detection_radius: float = 1.0
+    arena: Arena | None = None
+    bodies: Bodies = field(default_factory=Bodies)
+    motion: Motion = field(default_factory=Motion)
+    timing: Timing = field(default_factory=Timing)
+    urgency: UrgencyModel = field(default_factory=UrgencyModel)
+    realism: Realism = field(default_factory=Realism)
+    reprioritisations: tuple[Reprioritisation, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "robots", check_int("robots", self.robots, low=1))
+        carriers = check_int("carriers", self.carriers, low=1, high=MAX_CARRIERS)
+        object.__setattr__(self, "carriers", carriers)
+        object.__setattr__(self, "ticks", check_int("ticks", self.ticks, low=1))
+        object.__setattr__(self, "tick", check_number("tick", self.tick, low=0.0, low_open=True))
+        radius = check_number("detection_radius", self.detection_radius, low=0.0, low_open=True)
+        object.__setattr__(self, "detection_radius", radius)
+        if self.arena is None:
+            object.__setattr__(self, "arena", Arena.scaled(carriers))
+        for name, kind in (
+            ("arena", Arena),
+            ("bodies", Bodies),
+            ("motion", Motion),
+            ("timing", Timing),
+            ("urgency", UrgencyModel),
+            ("realism", Realism),
+        ):
+            part: object = getattr(self, name)
+            if not isinstance(part, kind):
+                msg = f"{name}: {part!r} is not a {kind.__name__}"
+                raise ConfigError(msg)
+        events = tuple(self.reprioritisations)
+        for item in events:
+            event: object = item
+            if not isinstance(event, Reprioritisation):
+                msg = f"reprioritisations: {event!r} is not a Reprioritisation"
+                raise ConfigError(msg)
+        object.__setattr__(self, "reprioritisations", events)
+        self._check_geometry()
+        self._check_events()
+
+    @classmethod
+    def default(cls, robots: int = 3, carriers: int = 7) -> Scenario:
+        """SPEC defaults for ``robots`` / ``carriers``, the arena scaled by the density rule."""
+        return cls(robots=robots, carriers=carriers)
+
+    @classmethod
+    def from_mapping(
+        cls, data: Mapping[str, Any], overrides: Mapping[str, Any] | None = None
+    ) -> Scenario:
+        """A scenario from a mapping (TOML layout), with ``overrides`` merged on top.
+
+        Overrides may nest or use dotted keys; unknown keys are errors.
+
+        >>> s = Scenario.from_mapping({"carriers": 28}, {"timing.dock": 2.0})
+        >>> round(s.area.size, 6), s.timing.dock
+        (7.5, 2.0)
+        >>> Scenario.from_mapping({"arena": {"sise": 4.0}})
+        Traceback (most recent call last):
+        ...
+        swarmtag.errors.ConfigError: arena.sise: unknown key; [arena] has keys ...
+        """
+        return cls(**scenario_fields(data, overrides))
+
+    @classmethod
+    def from_toml(
+        cls, path: str | os.PathLike[str], overrides: Mapping[str, Any] | None = None
+    ) -> Scenario:
+        """A scenario from a TOML file (the ``from_mapping`` layout), with ``overrides``."""
+        try:
+            return cls.from_mapping(load_toml(path), overrides)
+        except ConfigError as error:
+            msg = f"{os.fspath(path)}: {error}"
+            raise ConfigError(msg) from None
+
+    def to_mapping(self) -> dict[str, Any]:
+        """Plain nested values that ``from_mapping`` reads back into an equal scenario.
+
+        >>> Scenario.from_mapping(Scenario.default().to_mapping()) == Scenario.default()
+        True
+        """
+        return scenario_to_mapping({f.name: getattr(self, f.name) for f in fields(self)})
+
+    @property
+    def area(self) -> Arena:
+        """The arena (never ``None`` after construction)."""
+        assert self.arena is not None
+        return self.arena
+
+    @property
+    def run_ticks(self) -> int:
+        """Ticks a run lasts at most: ``ticks`` (growing) or the static time limit."""
+        return self.ticks if self.urgency.model == "growing" else self.urgency.static_time_limit
+
+    def _check_geometry(self) -> None:
+        arena, bodies, motion = self.area, self.bodies, self.motion
+        radius = bodies.robot_diameter / 2
+        if arena.carrier_spacing < bodies.robot_diameter:
+            msg = (
+                f"arena.carrier_spacing: {arena.carrier_spacing!r} is less than the robot "
+                f"diameter {bodies.robot_diameter!r}; a robot must fit between two carriers"
+            )
+            raise ConfigError(msg)
+        if motion.predock_distance <= radius:
+            msg = (
+                f"motion.predock_distance: {motion.predock_distance!r} is not more than the "
+                f"robot radius {radius!r}; the robot must stand clear of the carrier face"
+            )
+            raise ConfigError(msg)
+        if motion.speed * self.tick > radius:
+            msg = (
+                f"motion.speed: {motion.speed!r} m/s moves more than the robot radius per tick "
+                f"({self.tick!r} s); use a shorter tick or a lower speed"
+            )
+            raise ConfigError(msg)
+        largest = max(bodies.robot_diameter, bodies.carrier_size)
+        if arena.dropoff_width < largest:
+            msg = (
+                f"arena.dropoff_width: {arena.dropoff_width!r} is smaller than a loaded robot "
+                f"({largest!r}); a carrier must fit inside the drop-off area"
+            )
+            raise ConfigError(msg)
+        pitch = bodies.carrier_size + arena.carrier_spacing
+        room = _grid_capacity(arena.pickup_width, arena.size, bodies.carrier_size, pitch)
+        if self.carriers > room:
+            msg = (
+                f"carriers: {self.carriers} do not fit in the pick-up area "
+                f"({arena.pickup_width!r} x {arena.size!r} m holds at most {room} with spacing "
+                f"{arena.carrier_spacing!r}); widen arena.pickup_width or use fewer carriers"
+            )
+            raise ConfigError(msg)
+        room = _grid_capacity(
+            arena.dropoff_width, arena.size, bodies.robot_diameter, bodies.robot_diameter
+        )
+        if self.robots > room:
+            msg = (
+                f"robots: {self.robots} do not fit in the drop-off area where they start "
+                f"(at most {room}); widen arena.dropoff_width or use fewer robots"
+            )
+            raise ConfigError(msg)
+
+    def _check_events(self) -> None:
+        for event in self.reprioritisations:
+            if event.carrier >= self.carriers:
+                msg = (
+                    f"reprioritisations.carrier: {event.carrier} is not a carrier of this "
+                    f"scenario (0-{self.carriers - 1})"
+                )
+                raise ConfigError(msg)
+            if event.tick > self.run_ticks:
+                msg = (
+                    f"reprioritisations.tick: {event.tick} is after the end of the run "
+                    f"(1-{self.run_ticks})"
+                )
+                raise ConfigError(msg)

@@ -1,0 +1,129 @@
+"""Per-tick trajectories for replay, snapshots and animations (SPEC §4.4).
+
+Everything a renderer needs, with a leading run axis and then a time axis
+(tick 0 = the start, then one entry per tick, after the tick's last phase):
+robots' positions, headings, modes and targets; carriers' positions,
+statuses, urgencies, holders and presence; plus the static ``Geometry``
+(arena, zones, detection radius, body sizes). Runs that ended before the
+batch stopped repeat their final state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag.sim.geometry import Float
+from swarmtag.sim.params import Params
+from swarmtag.sim.state import Int, WorldState
+
+__all__ = ["Geometry", "Trajectories", "TrajectoryRecorder"]
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The static picture: arena ``[0, arena]^2`` (m), zones, detection radius, body sizes."""
+
+    arena: float
+    pickup_right: float
+    """The pick-up area is ``0 <= x <= pickup_right``."""
+    dropoff_left: float
+    """The drop-off area (destination 0) is ``dropoff_left <= x <= arena``."""
+    detection_radius: float
+    robot_radius: float
+    carrier_size: float
+    tick_seconds: float
+
+    @classmethod
+    def from_params(cls, params: Params) -> Geometry:
+        """The geometry of a parameter set."""
+        return cls(
+            arena=params.arena,
+            pickup_right=params.pickup_right,
+            dropoff_left=params.dropoff_left,
+            detection_radius=params.detection_radius,
+            robot_radius=params.robot_radius,
+            carrier_size=2 * params.carrier_half,
+            tick_seconds=params.scenario.tick,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectories:
+    """Recorded states, shapes (R, T + 1, ...) for R runs and T recorded ticks.
+
+    ``robot_mode`` holds ``swarmtag.sim.Mode`` values; ``robot_target`` and
+    ``carried_by`` are -1 for none; ``carrier_status`` holds ``TagStatus``
+    values; carriers with ``carrier_present`` false have been delivered.
+    """
+
+    geometry: Geometry
+    condition: str
+    seed: int
+    run_ids: Int
+    time: Int
+    """(T + 1,) tick numbers 0..T."""
+    robot_pos: Float
+    robot_heading: Float
+    robot_mode: NDArray[np.int8]
+    robot_target: NDArray[np.int16]
+    carrier_pos: Float
+    carrier_status: NDArray[np.int8]
+    carrier_urgency: NDArray[np.int8]
+    carried_by: NDArray[np.int16]
+    carrier_present: NDArray[np.bool_]
+    ended_at: Int
+    """(R,) tick each run ended, -1 if it was still running when recording stopped."""
+
+    @property
+    def ticks(self) -> int:
+        """Number of recorded ticks T."""
+        return int(self.time.shape[0]) - 1
+
+
+_FIELDS = {
+    "robot_pos": ("robot_pos", np.float64),
+    "robot_heading": ("heading", np.float64),
+    "robot_mode": ("mode", np.int8),
+    "robot_target": ("target", np.int16),
+    "carrier_pos": ("carrier_pos", np.float64),
+    "carrier_status": ("status", np.int8),
+    "carrier_urgency": ("urgency", np.int8),
+    "carried_by": ("carried_by", np.int16),
+    "carrier_present": ("present", np.bool_),
+}
+
+
+class TrajectoryRecorder:
+    """Collects states tick by tick into preallocated arrays."""
+
+    def __init__(self, first: WorldState, max_ticks: int) -> None:
+        self._arrays: dict[str, NDArray[Any]] = {}
+        for name, (source, dtype) in _FIELDS.items():
+            value = getattr(first, source)
+            shape = (value.shape[0], max_ticks + 1, *value.shape[1:])
+            self._arrays[name] = np.empty(shape, dtype=dtype)
+        self._count = 0
+        self.add(first)
+
+    def add(self, state: WorldState) -> None:
+        """Record ``state`` as the next time step."""
+        for name, (source, _dtype) in _FIELDS.items():
+            self._arrays[name][:, self._count] = getattr(state, source)
+        self._count += 1
+
+    def finish(self, params: Params, *, seed: int, last: WorldState) -> Trajectories:
+        """The trajectories recorded so far."""
+        arrays = {name: array[:, : self._count].copy() for name, array in self._arrays.items()}
+        return Trajectories(
+            geometry=Geometry.from_params(params),
+            condition=params.condition,
+            seed=seed,
+            run_ids=last.run_ids.copy(),
+            time=np.arange(self._count, dtype=np.int64),
+            ended_at=last.ended_at.copy(),
+            **arrays,
+        )

@@ -1,0 +1,150 @@
+"""``swarmtag simulate``: conditions, outputs, determinism through the CLI, bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from swarmtag.cli import main
+from swarmtag.io import read_event_log
+
+SMALL = ["--ticks", "400", "--resamples", "200", "--no-progress"]
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    with pytest.raises(SystemExit) as exited:
+        main(["simulate", *argv])
+    out, err = capsys.readouterr()
+    return int(exited.value.code or 0), out, err
+
+
+def test_json_has_every_condition_and_comparison(capsys):
+    code, out, _ = run(
+        capsys, *SMALL, "--runs", "3", "--condition", "proximity",
+        "--condition", "urgency:alpha=9", "--condition", "weighted:w=0.5", "--json",
+    )  # fmt: skip
+    assert code == 0
+    data = json.loads(out)
+    assert [c["condition"] for c in data["conditions"]] == [
+        "proximity", "urgency:alpha=9.0", "weighted:w=0.5",
+    ]  # fmt: skip
+    assert all(c["runs"] == 3 for c in data["conditions"])
+    metrics = {"p95_latency", "mean_latency", "throughput", "pa", "deliveries_per_run"}
+    assert {(c["condition"], c["metric"]) for c in data["comparisons"]} == {
+        (name, metric) for name in ("urgency:alpha=9.0", "weighted:w=0.5") for metric in metrics
+    }
+
+
+def test_table_output_names_the_scenario(capsys):
+    code, out, _ = run(capsys, *SMALL, "--runs", "2", "--policy", "urgency", "--alpha", "3")
+    assert code == 0
+    assert (
+        "3 robots, 7 carriers, 400 ticks (growing urgency), detection radius 1 m, "
+        "2 runs from run 0, seed 0"
+    ) in out
+    assert "urgency:alpha=3.0" in out
+    assert "PA (5-50 %)" in out
+
+
+def test_run_alone_equals_run_in_batch(capsys, tmp_path):
+    batch, alone = tmp_path / "batch.csv", tmp_path / "alone.csv"
+    assert run(capsys, *SMALL, "--runs", "4", "--seed", "7", "--events", str(batch))[0] == 0
+    assert run(capsys, *SMALL, "--runs", "1", "--run-offset", "2", "--seed", "7",
+               "--events", str(alone))[0] == 0  # fmt: skip
+    header, *rows = batch.read_text().splitlines()
+    run_column = header.split(",").index("run")
+    in_batch = [r for r in rows if r.split(",")[run_column] == "2"]
+    assert alone.read_text().splitlines() == [header, *in_batch]
+    log = read_event_log(batch)
+    assert sorted(np.unique(log.run).tolist()) == [0, 1, 2, 3]
+    assert set(log.condition.tolist()) == {"proximity", "urgency:alpha=0.7"}
+
+
+def test_same_initial_scene_in_every_condition(capsys, tmp_path):
+    path = tmp_path / "events.csv"
+    assert run(capsys, *SMALL, "--runs", "3", "--events", str(path))[0] == 0
+    log = read_event_log(path)
+    scenes = {}
+    for name in ("proximity", "urgency:alpha=0.7"):
+        rows = log.condition == name
+        order = np.lexsort((log.carrier[rows], log.run[rows]))
+        scenes[name] = (log.urgency0[rows][order].tolist(), log.order_time[rows][order].tolist())
+    assert scenes["proximity"] == scenes["urgency:alpha=0.7"]
+
+
+def test_snapshot_and_animation_are_real_pictures(capsys, tmp_path):
+    snap, anim = tmp_path / "snap.png", tmp_path / "run.gif"
+    code, out, _ = run(
+        capsys, *SMALL, "--runs", "1", "--condition", "urgency:alpha=0.7",
+        "--snapshot", str(snap), "--animate", str(anim),
+    )  # fmt: skip
+    assert code == 0
+    assert "snapshot of urgency:alpha=0.7 run 0 at tick" in out
+    with Image.open(snap) as image:
+        assert image.format == "PNG"
+        assert image.size[0] > 400
+        assert len(image.convert("RGB").getcolors(maxcolors=100_000) or []) > 20  # not blank
+    with Image.open(anim) as movie:
+        assert movie.format == "GIF"
+        assert movie.n_frames > 3
+
+
+def test_several_conditions_draw_one_file_each(capsys, tmp_path):
+    snap = tmp_path / "snap.png"
+    assert run(capsys, *SMALL, "--runs", "1", "--snapshot", str(snap))[0] == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "snap-proximity.png", "snap-urgency-alpha-0.7.png",
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (["--condition", "proximity", "--policy", "urgency", "--alpha", "1"], "not both"),
+        (["--policy", "urgency"], "takes --alpha"),
+        (["--policy", "weighted", "--alpha", "1"], "takes --w"),
+        (["--alpha", "0.7"], "need --policy"),
+        (["--condition", "urgency:alpha=-1"], "alpha"),
+        (["--condition", "fastest"], "fastest"),
+        (["--condition", "proximity", "--condition", "proximity"], "given twice"),
+        (["--snapshot", "out.jpg"], "--snapshot"),
+        (["--animate", "out.avi"], "--animate"),
+        (["--events", "no/such/folder/events.csv"], "does not exist"),
+        (["--runs", "0"], "--runs"),
+        (["--robots", "0"], "--robots"),
+        (["--config", "missing.toml"], "missing.toml"),
+        (["--baseline", "nonexistent"], "nonexistent"),
+    ],
+)
+def test_bad_input_one_line_exit_2(capsys, tmp_path, monkeypatch, argv, words):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, *SMALL, "--runs", "1", *argv)
+    assert code == 2
+    assert out == ""
+    assert err.count("\n") == 1, err
+    assert err.startswith("swarmtag: error: ")
+    assert words in err
+    assert list(tmp_path.iterdir()) == []  # nothing half-written
+
+
+def test_bad_config_names_the_key(capsys, tmp_path):
+    config = tmp_path / "scenario.toml"
+    config.write_text("robots = 4\n[timing]\ndokc = 2.0\n")
+    code, _, err = run(capsys, *SMALL, "--runs", "1", "--config", str(config))
+    assert code == 2
+    assert "timing.dokc" in err
+
+
+def test_config_file_and_flags(capsys, tmp_path):
+    config = tmp_path / "scenario.toml"
+    config.write_text("robots = 4\ncarriers = 9\n")
+    code, out, _ = run(
+        capsys, *SMALL, "--runs", "1", "--config", str(config), "--robots", "2",
+        "--detection-radius", "2.5",
+    )  # fmt: skip
+    assert code == 0
+    assert "2 robots, 9 carriers" in out
+    assert "detection radius 2.5 m" in out

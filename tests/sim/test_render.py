@@ -1,0 +1,59 @@
+"""Snapshots and animations drawn from recorded trajectories."""
+
+from __future__ import annotations
+
+import pytest
+from PIL import Image
+
+from swarmtag.errors import ConfigError
+from swarmtag.policy import Urgency
+from swarmtag.sim import Mode, Scenario, simulate
+from swarmtag.sim.render import animate, default_snapshot_tick, snapshot
+
+
+@pytest.fixture(scope="module")
+def traj():
+    result = simulate(
+        Scenario(ticks=300), Urgency(alpha=0.7), seed=3, runs=2, run_offset=5, record=True
+    )
+    assert result.trajectories is not None
+    return result.trajectories
+
+
+def test_default_tick_shows_the_most_pursuits(traj):
+    tick = default_snapshot_tick(traj, 6)
+    modes = traj.robot_mode[1]
+    pursuing = ((modes == Mode.PREDOCK) | (modes == Mode.DOCK) | (modes == Mode.CENTRE)).sum(axis=1)
+    assert pursuing[tick] == pursuing.max()
+    assert pursuing.max() >= 1
+
+
+def test_snapshot_writes_a_png_at_the_asked_tick(traj, tmp_path):
+    path = tmp_path / "s.png"
+    assert snapshot(traj, path, run=5, tick=0) == 0
+    with Image.open(path) as image:
+        assert image.format == "PNG"
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "words"), [({"run": 0}, "run: 0"), ({"run": 5, "tick": 301}, "tick: 301")]
+)
+def test_snapshot_refuses_what_was_not_recorded(traj, tmp_path, kwargs, words):
+    with pytest.raises(ConfigError, match=words):
+        snapshot(traj, tmp_path / "s.png", **kwargs)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_animation_frames_cover_the_run(traj, tmp_path):
+    path = tmp_path / "a.gif"
+    frames = animate(traj, path, run=5, every=50)
+    end = traj.ended_at[0] if traj.ended_at[0] >= 0 else traj.ticks
+    assert frames == len(range(0, int(end) + 1, 50)) + (int(end) % 50 != 0)
+    with Image.open(path) as movie:
+        assert movie.n_frames == frames
+
+
+def test_animation_format_checked_first(traj, tmp_path):
+    with pytest.raises(ConfigError, match=r"\.gif or \.mp4"):
+        animate(traj, tmp_path / "a.avi", run=5)
+    assert list(tmp_path.iterdir()) == []
