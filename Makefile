@@ -13,8 +13,15 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
+DEMO_OUT ?= out/demo
+
+# The main job: proximity vs urgency(alpha=0.7), 40 runs of 3 robots / 7 carriers,
+# KPI table with CIs, event log, a snapshot and an animation of run 0 per condition.
 demo: $(STAMP)
-	$(BIN)/swarmtag demo
+	mkdir -p $(DEMO_OUT)
+	$(BIN)/swarmtag simulate --runs 40 --condition proximity --condition urgency:alpha=0.7 \
+		--events $(DEMO_OUT)/events.csv --snapshot $(DEMO_OUT)/snapshot.png \
+		--animate $(DEMO_OUT)/run.gif
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks
