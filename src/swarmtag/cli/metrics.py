@@ -12,6 +12,7 @@ from rich.table import Table
 
 from swarmtag.analysis import METRICS, MetricsReport, summarize
 from swarmtag.cli._console import make_console
+from swarmtag.cli._options import baseline_option, resamples_option
 from swarmtag.io import read_event_log
 
 __all__ = ["metrics"]
@@ -137,21 +138,8 @@ def render_report(report: MetricsReport, console: Console) -> None:
 
 @click.command("metrics")
 @click.argument("events", metavar="EVENTS", type=click.Path(path_type=Path))
-@click.option(
-    "--baseline",
-    metavar="NAME",
-    default=None,
-    help="Condition to compare with [default: proximity if present, else the first in sorted "
-    "order].",
-)
-@click.option(
-    "--resamples",
-    type=click.IntRange(min=1),
-    default=10_000,
-    show_default=True,
-    metavar="N",
-    help="Bootstrap resamples of whole runs per condition.",
-)
+@baseline_option
+@resamples_option
 @click.option(
     "--seed",
     type=click.IntRange(min=0),

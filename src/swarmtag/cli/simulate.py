@@ -14,6 +14,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from swarmtag.analysis import summarize
 from swarmtag.cli._console import make_console
+from swarmtag.cli._options import baseline_option, resamples_option
 from swarmtag.cli.metrics import render_report
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
@@ -222,10 +223,8 @@ def _draw(
     type=click.IntRange(min=0),
     help="Run to draw with --snapshot/--animate [default: the first run].",
 )
-@click.option("--baseline", metavar="NAME", help="Condition to compare with [default: proximity].")
-@click.option(
-    "--resamples", type=click.IntRange(min=1), default=10_000, show_default=True, metavar="N"
-)
+@baseline_option
+@resamples_option
 @click.option("--json", "as_json", is_flag=True, help="Print the KPI JSON of SPEC §8.2.")
 @click.option(
     "--progress/--no-progress",
