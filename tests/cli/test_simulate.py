@@ -148,3 +148,47 @@ def test_config_file_and_flags(capsys, tmp_path):
     assert code == 0
     assert "2 robots, 9 carriers" in out
     assert "detection radius 2.5 m" in out
+
+
+def test_trajectories_saved_for_replay_match_a_recorded_run(capsys, tmp_path):
+    import dataclasses
+
+    from swarmtag.policy import Urgency
+    from swarmtag.sim import Scenario, Trajectories, simulate
+    from swarmtag.sim.render import snapshot
+
+    path = tmp_path / "run.npz"
+    code, out, _ = run(
+        capsys, *SMALL, "--runs", "3", "--seed", "4", "--condition", "urgency:alpha=0.7",
+        "--draw-run", "2", "--trajectories", str(path),
+    )  # fmt: skip
+    assert code == 0
+    assert "trajectories of urgency:alpha=0.7 run 2" in out
+    loaded = Trajectories.load(path)
+    direct = simulate(
+        Scenario(ticks=400), Urgency(alpha=0.7), seed=4, runs=1, run_offset=2, record=True
+    )
+    assert direct.trajectories is not None
+    for field in dataclasses.fields(Trajectories):
+        mine, theirs = getattr(loaded, field.name), getattr(direct.trajectories, field.name)
+        if isinstance(mine, np.ndarray):
+            assert mine.dtype == theirs.dtype, field.name
+            assert np.array_equal(mine, theirs), field.name
+        else:
+            assert mine == theirs, field.name
+    snapshot(loaded, tmp_path / "replay.png", run=2)  # a saved run can be drawn again
+    assert (tmp_path / "replay.png").stat().st_size > 10_000
+
+
+def test_trajectories_load_refuses_other_files(tmp_path):
+    from swarmtag.errors import ConfigError
+    from swarmtag.sim import Trajectories
+
+    other = tmp_path / "other.npz"
+    np.savez(other, x=np.zeros(3))
+    with pytest.raises(ConfigError, match="not a swarmtag trajectories file"):
+        Trajectories.load(other)
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(b"not a zip")
+    with pytest.raises(ConfigError, match="cannot read trajectories"):
+        Trajectories.load(junk)

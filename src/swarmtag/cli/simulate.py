@@ -137,8 +137,9 @@ def _draw(
     run: int,
     snapshot_path: Path | None,
     animation_path: Path | None,
+    trajectories_path: Path | None,
 ) -> list[str]:
-    """Re-run ``run`` of each condition with recording on and draw it; say what was written."""
+    """Re-run ``run`` of each condition recording it; draw and save it; say what was written."""
     from swarmtag.sim.render import animate, snapshot  # noqa: PLC0415 - matplotlib is an extra
 
     written = []
@@ -155,6 +156,12 @@ def _draw(
             target = _per_condition(animation_path, policy, several)
             frames = animate(traj, target, run=run)
             written.append(f"animation of {policy.name} run {run} ({frames} frames): {target}")
+        if trajectories_path is not None:
+            target = _per_condition(trajectories_path, policy, several)
+            traj.save(target)
+            written.append(
+                f"trajectories of {policy.name} run {run} ({traj.ticks} ticks): {target}"
+            )
     return written
 
 
@@ -219,9 +226,15 @@ def _draw(
     help="Animate a run (.gif or .mp4).",
 )
 @click.option(
+    "--trajectories",
+    "trajectories_out",
+    type=click.Path(path_type=Path),
+    help="Save the drawn run's per-tick trajectories for replay (.npz).",
+)
+@click.option(
     "--draw-run",
     type=click.IntRange(min=0),
-    help="Run to draw with --snapshot/--animate [default: the first run].",
+    help="Run to draw or save with --snapshot/--animate/--trajectories [default: the first run].",
 )
 @baseline_option
 @resamples_option
@@ -250,6 +263,7 @@ def simulate_cmd(
     event_table: Path | None,
     snapshot: Path | None,
     animation: Path | None,
+    trajectories_out: Path | None,
     draw_run: int | None,
     baseline: str | None,
     resamples: int,
@@ -276,6 +290,7 @@ def simulate_cmd(
             ("--event-table", event_table, (".csv", ".parquet")),
             ("--snapshot", snapshot, (".png",)),
             ("--animate", animation, (".gif", ".mp4")),
+            ("--trajectories", trajectories_out, (".npz",)),
         ]
     )
     console = make_console()
@@ -291,7 +306,7 @@ def simulate_cmd(
     if event_table is not None:
         write_event_table(table, event_table)
         notes.append(f"event table ({len(table)} rows): {event_table}")
-    if snapshot is not None or animation is not None:
+    if snapshot is not None or animation is not None or trajectories_out is not None:
         notes += _draw(
             scenario,
             policies,
@@ -299,6 +314,7 @@ def simulate_cmd(
             run=run_offset if draw_run is None else draw_run,
             snapshot_path=snapshot,
             animation_path=animation,
+            trajectories_path=trajectories_out,
         )
     if as_json:
         click.echo(json.dumps(report.to_json(), allow_nan=False))

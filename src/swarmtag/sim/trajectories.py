@@ -10,12 +10,16 @@ batch stopped repeat their final state.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+import os
+import zipfile
+from dataclasses import asdict, dataclass, fields
+from typing import Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._atomic import atomic_path
+from swarmtag.errors import ConfigError
 from swarmtag.sim.geometry import Float
 from swarmtag.sim.params import Params
 from swarmtag.sim.state import Int, WorldState
@@ -83,6 +87,45 @@ class Trajectories:
         """Number of recorded ticks T."""
         return int(self.time.shape[0]) - 1
 
+    def save(self, path: str | os.PathLike[str]) -> None:
+        """Write a compressed ``.npz`` file that ``load`` reads back, for replay and drawing."""
+        payload: dict[str, Any] = {
+            f.name: getattr(self, f.name) for f in fields(self) if f.name not in _SCALARS
+        }
+        payload.update(format=_FORMAT, condition=self.condition, seed=self.seed)
+        payload.update({f"geometry.{k}": v for k, v in asdict(self.geometry).items()})
+        with atomic_path(path) as temp, temp.open("wb") as handle:
+            arrays = {k: np.asarray(v) for k, v in payload.items()}
+            # numpy's stubs let ** reach the bool allow_pickle (numpy >= 2.1 only): not ours.
+            np.savez_compressed(handle, **arrays)  # type: ignore[arg-type]
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> Trajectories:
+        """Read trajectories written by ``save``; ``ConfigError`` if the file is not one."""
+        where = os.fspath(path)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                if "format" not in data or str(data["format"]) != _FORMAT:
+                    msg = f"{where}: not a swarmtag trajectories file ({_FORMAT})"
+                    raise ConfigError(msg)
+                geometry = Geometry(
+                    **{f.name: float(data[f"geometry.{f.name}"]) for f in fields(Geometry)}
+                )
+                arrays = {f.name: data[f.name] for f in fields(cls) if f.name not in _SCALARS}
+                return cls(
+                    geometry=geometry,
+                    condition=str(data["condition"]),
+                    seed=int(data["seed"]),
+                    **arrays,
+                )
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile) as error:
+            msg = f"{where}: cannot read trajectories ({error})"
+            raise ConfigError(msg) from None
+
+
+_FORMAT: Final = "swarmtag-trajectories-1"
+"""Version tag stored in every trajectories file."""
+_SCALARS: Final = frozenset({"geometry", "condition", "seed"})
 
 _FIELDS = {
     "robot_pos": ("robot_pos", np.float64),
