@@ -168,3 +168,36 @@ def test_partly_undefined_resamples_are_noted(tmp_path, capsys):
     assert "Mean latency (time units) of proximity was undefined in" in out
     assert "of 400 resamples (left out of its CI)." in out
     assert "Throughput (per 100 time units) of proximity was undefined" not in out
+
+
+def test_markdown_latex_and_figures_written(tmp_path, capsys):
+    from swarmtag.cli import main
+    from swarmtag.data import example_trial_path
+
+    argv = [
+        "metrics", str(example_trial_path()), "--resamples", "300",
+        "--markdown", str(tmp_path / "t.md"), "--latex", str(tmp_path / "t.tex"),
+        "--figures", str(tmp_path / "fig"),
+    ]  # fmt: skip
+    with pytest.raises(SystemExit) as exited:
+        main(argv)
+    out = capsys.readouterr().out
+    assert exited.value.code == 0
+    assert (tmp_path / "t.md").read_text().startswith("| Metric | proximity |")
+    assert r"\begin{tabular}" in (tmp_path / "t.tex").read_text()
+    assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == [
+        "latency_curves.png", "pa_curves.png", "urgency_latency.png",
+    ]  # fmt: skip
+    assert f"wrote Markdown tables: {tmp_path / 't.md'}" in out
+
+
+def test_markdown_into_missing_folder_is_refused_before_work(tmp_path, capsys):
+    from swarmtag.cli import main
+    from swarmtag.data import example_trial_path
+
+    with pytest.raises(SystemExit) as exited:
+        main(["metrics", str(example_trial_path()), "--markdown", str(tmp_path / "no" / "t.md")])
+    err = capsys.readouterr().err
+    assert exited.value.code == 2
+    assert "--markdown: folder" in err
+    assert list(tmp_path.iterdir()) == []

@@ -3,55 +3,27 @@
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import click
 from rich.console import Console, JustifyMethod
 from rich.table import Table
 
+from swarmtag._atomic import atomic_write_bytes
 from swarmtag.analysis import METRICS, MetricsReport, summarize
+from swarmtag.analysis.tables import (
+    format_interval,
+    format_p_value,
+    latex_tables,
+    markdown_tables,
+    metric_label,
+)
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, resamples_option
+from swarmtag.errors import ConfigError
 from swarmtag.io import read_event_log
 
 __all__ = ["metrics"]
-
-_UNIT_WORDS = {"s": "s", "tick": "ticks", None: "time units"}
-_LABELS = {
-    "p95_latency": "P95 latency ({unit})",
-    "mean_latency": "Mean latency ({unit})",
-    "throughput": "Throughput (per 100 {unit})",
-    "pa": "PA (5-50 %)",
-    "deliveries_per_run": "Deliveries per run",
-}
-
-
-def _number(value: float | None) -> str:
-    """Four significant digits without an exponent; ``n/a`` where undefined."""
-    if value is None or math.isnan(value):
-        return "n/a"
-    if value == 0:
-        return "0"
-    magnitude = math.floor(math.log10(abs(value)))
-    return f"{value:.{min(4, max(0, 3 - magnitude))}f}"
-
-
-def _with_interval(value: float | None, low: float | None, high: float | None) -> str:
-    interval = "" if low is None or high is None else f" [{_number(low)}, {_number(high)}]"
-    return f"{_number(value)}{interval}"
-
-
-def _p_value(p: float | None, resamples: int) -> str:
-    if p is None:
-        return "n/a"
-    if p == 0:
-        return f"< {2 / resamples:.2g}"
-    return f"{p:.3g}"
-
-
-def _label(metric: str, unit: str) -> str:
-    return _LABELS[metric].format(unit=unit)
 
 
 def _time_note(time_unit: str | None) -> str:
@@ -66,7 +38,6 @@ def _time_note(time_unit: str | None) -> str:
 
 
 def render_report(report: MetricsReport, console: Console) -> None:
-    unit = _UNIT_WORDS.get(report.time_unit, "time units")
     level = f"{report.confidence_level * 100:g} %"
     kpis = Table(title=f"Metrics by condition: value [{level} CI]", title_justify="left")
     kpis.add_column("Metric")
@@ -78,8 +49,8 @@ def render_report(report: MetricsReport, console: Console) -> None:
         for statistics in report.conditions:
             estimate = statistics.estimate(metric)
             interval = estimate.confidence_interval
-            cells.append(_with_interval(estimate.value, interval.low, interval.high))
-        kpis.add_row(_label(metric, unit), *cells)
+            cells.append(format_interval(estimate.value, interval.low, interval.high))
+        kpis.add_row(metric_label(metric, report.time_unit), *cells)
     kpis.add_row("Total deliveries", *(str(s.kpis.total_deliveries) for s in report.conditions))
     kpis.add_row("Undelivered carriers", *(str(s.kpis.undelivered) for s in report.conditions))
     console.print(kpis)
@@ -102,10 +73,10 @@ def render_report(report: MetricsReport, console: Console) -> None:
             interval = comparison.confidence_interval
             diffs.add_row(
                 comparison.condition,
-                _label(comparison.metric, unit),
-                _with_interval(comparison.diff, interval.low, interval.high),
-                _p_value(comparison.p_bootstrap, report.n_resamples),
-                _p_value(comparison.p_mannwhitney, report.n_resamples),
+                metric_label(comparison.metric, report.time_unit),
+                format_interval(comparison.diff, interval.low, interval.high),
+                format_p_value(comparison.p_bootstrap, report.n_resamples),
+                format_p_value(comparison.p_mannwhitney, report.n_resamples),
             )
         console.print(diffs)
     else:
@@ -124,7 +95,8 @@ def render_report(report: MetricsReport, console: Console) -> None:
             missing = estimate.n_undefined
             if missing and estimate.value is not None:  # undefined outright shows as n/a
                 console.print(
-                    f"{_label(metric, unit)} of {statistics.condition} was undefined in "
+                    f"{metric_label(metric, report.time_unit)} of {statistics.condition} "
+                    "was undefined in "
                     f"{missing} of {report.n_resamples} resamples (left out of its CI).",
                     highlight=False,
                 )
@@ -151,8 +123,26 @@ def render_report(report: MetricsReport, console: Console) -> None:
 @click.option(
     "--json", "as_json", is_flag=True, help="Print one JSON object (SPEC §8.2) instead of tables."
 )
+@click.option(
+    "--markdown", type=click.Path(path_type=Path), help="Also write the tables as Markdown."
+)
+@click.option("--latex", type=click.Path(path_type=Path), help="Also write the tables as LaTeX.")
+@click.option(
+    "--figures",
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Also draw the PA and latency curves with bands, latency per urgency level and, "
+    "for a one-policy sweep, the parameter sweep, as PNGs in this folder.",
+)
 def metrics(
-    events: Path, *, baseline: str | None, resamples: int, seed: int, as_json: bool
+    events: Path,
+    *,
+    baseline: str | None,
+    resamples: int,
+    seed: int,
+    as_json: bool,
+    markdown: Path | None,
+    latex: Path | None,
+    figures: Path | None,
 ) -> None:
     """KPIs of an event log EVENTS (.csv or .parquet) with 95 % bootstrap CIs over runs.
 
@@ -161,8 +151,29 @@ def metrics(
     deliveries and undelivered carriers. Each other condition is compared with
     the baseline: difference with CI, bootstrap p-value and Mann-Whitney U.
     """
-    report = summarize(read_event_log(events), baseline=baseline, n_resamples=resamples, seed=seed)
+    for option, path in (("--markdown", markdown), ("--latex", latex)):
+        if path is not None and not path.parent.is_dir():
+            raise ConfigError(f"{option}: folder {str(path.parent)!r} does not exist")
+    log = read_event_log(events)
+    report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
+    written = []
+    if markdown is not None:
+        atomic_write_bytes(markdown, markdown_tables(report).encode())
+        written.append(f"Markdown tables: {markdown}")
+    if latex is not None:
+        atomic_write_bytes(latex, latex_tables(report).encode())
+        written.append(f"LaTeX tables: {latex}")
+    if figures is not None:
+        from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
+
+        figures.mkdir(parents=True, exist_ok=True)
+        written += [f"figure: {path}" for path in write_figures(report, log, figures)]
     if as_json:
         click.echo(json.dumps(report.to_json(), allow_nan=False))
+        for line in written:
+            click.echo(f"wrote {line}", err=True)
         return
-    render_report(report, make_console())
+    console = make_console()
+    render_report(report, console)
+    for line in written:
+        console.print(f"wrote {line}", highlight=False)

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Final
 import numpy as np
 
 from swarmtag._atomic import atomic_path
+from swarmtag._plotting import pyplot
 from swarmtag.errors import ConfigError
 from swarmtag.sim.state import Mode
 from swarmtag.sim.trajectories import Trajectories
@@ -37,18 +38,6 @@ _PICKUP_COLOUR: Final = "#dbe9f6"
 _DROPOFF_COLOUR: Final = "#dff0d8"
 _ROBOT_COLOUR: Final = "tab:blue"
 _BROKEN_COLOUR: Final = "0.35"
-
-
-def _pyplot() -> Any:  # noqa: ANN401 - matplotlib.pyplot, imported lazily
-    try:
-        import matplotlib as mpl
-    except ImportError:  # pragma: no cover - the test environment has the extra
-        msg = "pictures need the 'plot' extra: pip install 'swarmtag[plot]'"
-        raise ConfigError(msg) from None
-    mpl.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _check_run(traj: Trajectories, run: int) -> int:
@@ -128,7 +117,7 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
 
 
 def _figure() -> tuple[Any, Figure, Axes]:
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.4, 5.6), dpi=110)
     fig.text(
         0.5, 0.01,

@@ -1,0 +1,193 @@
+"""Figures of a study's results: PA and latency curves with bands, parameter sweeps, urgency.
+
+Each function draws one figure from a ``MetricsReport`` (or per-urgency
+latencies) and writes it as a PNG atomically; matplotlib is imported
+lazily (the ``plot`` extra). These are the figures of the published study,
+plus latency per urgency level.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag._atomic import atomic_path
+from swarmtag._plotting import pyplot
+from swarmtag.analysis.latency import UrgencyLatency, latency_by_urgency
+from swarmtag.analysis.runs import ConditionRuns
+from swarmtag.analysis.summary import MetricsReport
+from swarmtag.analysis.tables import metric_label, unit_word
+from swarmtag.errors import StatisticsError
+from swarmtag.io import CarrierLog
+from swarmtag.policy import Urgency, Weighted, parse_policy
+
+__all__ = [
+    "latency_curve_figure",
+    "pa_curve_figure",
+    "sweep_figure",
+    "urgency_latency_figure",
+    "write_figures",
+]
+
+_SIZE: Final = (6.4, 4.2)
+
+
+def _save(fig: Any, path: str | os.PathLike[str]) -> None:  # noqa: ANN401 - a matplotlib Figure
+    fig.tight_layout()
+    with atomic_path(path) as temp:
+        fig.savefig(temp, format="png", dpi=120)
+
+
+def _curves(report: MetricsReport, path: str | os.PathLike[str], *, pa: bool) -> None:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=_SIZE)
+    try:
+        for statistics in report.conditions:
+            curve = statistics.pa_curve if pa else statistics.latency_curve
+            (line,) = ax.plot(
+                curve.x, curve.value, marker="o", markersize=3, label=statistics.condition
+            )
+            ax.fill_between(curve.x, curve.low, curve.high, color=line.get_color(), alpha=0.2)
+        if pa:
+            ax.set_xlabel("threshold p (%)")
+            ax.set_ylabel("PA(p), mean over runs")
+            ax.set_ylim(0, 1.02)
+        else:
+            ax.set_xlabel("percentile of pooled latencies")
+            ax.set_ylabel(f"latency ({unit_word(report.time_unit)})")
+        ax.set_title(
+            f"{'Priority alignment' if pa else 'Latency'} with 95 % bootstrap bands "
+            f"({report.n_resamples} resamples)",
+            fontsize=10,
+        )
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        _save(fig, path)
+    finally:
+        plt.close(fig)
+
+
+def pa_curve_figure(report: MetricsReport, path: str | os.PathLike[str]) -> None:
+    """PA(p) against the threshold p for every condition, with 95 % bands."""
+    _curves(report, path, pa=True)
+
+
+def latency_curve_figure(report: MetricsReport, path: str | os.PathLike[str]) -> None:
+    """Pooled latency against the percentile for every condition, with 95 % bands."""
+    _curves(report, path, pa=False)
+
+
+def _floats(values: Iterable[float | None]) -> NDArray[np.float64]:
+    """An array with NaN where a figure is undefined (matplotlib leaves a gap)."""
+    return np.array([np.nan if v is None else v for v in values], dtype=np.float64)
+
+
+def _parameter(name: str) -> float:
+    policy = parse_policy(name)
+    if isinstance(policy, Weighted):
+        return policy.w
+    if isinstance(policy, Urgency):
+        return policy.alpha
+    msg = f"{name}: a sweep needs weighted or urgency conditions"
+    raise StatisticsError(msg)
+
+
+def sweep_figure(
+    report: MetricsReport,
+    path: str | os.PathLike[str],
+    *,
+    metrics: Sequence[str] = ("pa", "p95_latency"),
+) -> None:
+    """Each metric (value and 95 % CI) against the policy parameter (w or alpha), one panel each."""
+    names = [c.condition for c in report.conditions]
+    x = np.array([_parameter(name) for name in names])
+    order = np.argsort(x)
+    plt = pyplot()
+    fig, axes = plt.subplots(1, len(metrics), figsize=(4.2 * len(metrics), 3.8), squeeze=False)
+    try:
+        for ax, metric in zip(axes[0], metrics, strict=True):
+            estimates = [report.condition(names[i]).estimate(metric) for i in order]
+            value = np.array([np.nan if e.value is None else e.value for e in estimates])
+            low = np.array(
+                [
+                    np.nan if e.confidence_interval.low is None else e.confidence_interval.low
+                    for e in estimates
+                ]
+            )
+            high = np.array(
+                [
+                    np.nan if e.confidence_interval.high is None else e.confidence_interval.high
+                    for e in estimates
+                ]
+            )
+            ax.plot(x[order], value, marker="o", color="tab:blue")
+            ax.fill_between(x[order], low, high, color="tab:blue", alpha=0.2)
+            ax.set_xlabel("w" if isinstance(parse_policy(names[0]), Weighted) else "alpha")
+            ax.set_ylabel(metric_label(metric, report.time_unit))
+            ax.grid(alpha=0.3)
+        fig.suptitle("Parameter sweep, values with 95 % bootstrap CIs", fontsize=10)
+        _save(fig, path)
+    finally:
+        plt.close(fig)
+
+
+def urgency_latency_figure(
+    by_condition: Mapping[str, Sequence[UrgencyLatency]],
+    path: str | os.PathLike[str],
+    *,
+    time_unit: str | None,
+) -> None:
+    """Mean and P95 latency per urgency level at run start, one line pair per condition."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=_SIZE)
+    try:
+        for name, levels in by_condition.items():
+            u = [level.urgency for level in levels]
+            mean = _floats(level.mean for level in levels)
+            p95 = _floats(level.p95 for level in levels)
+            (line,) = ax.plot(u, mean, marker="o", label=f"{name} mean")
+            ax.plot(u, p95, marker="^", linestyle="--", color=line.get_color(), label=f"{name} P95")
+        ax.set_xlabel("urgency at run start")
+        ax.set_ylabel(f"latency ({unit_word(time_unit)})")
+        ax.set_xticks(range(10))
+        ax.set_title("Latency per urgency level (delivered carriers)", fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, ncol=2)
+        _save(fig, path)
+    finally:
+        plt.close(fig)
+
+
+def _sweepable(names: Sequence[str]) -> bool:
+    """Two or more conditions of one parametrised policy (all weighted, or all urgency)."""
+    kinds = {type(parse_policy(name)) for name in names}
+    return len(names) >= 2 and len(kinds) == 1 and kinds <= {Weighted, Urgency}
+
+
+def write_figures(
+    report: MetricsReport, log: CarrierLog, folder: str | os.PathLike[str]
+) -> list[Path]:
+    """Every figure that applies to ``report`` (computed from ``log``), as PNGs in ``folder``.
+
+    Always the PA curves, latency curves and latency per urgency level; the
+    parameter sweep too when all conditions are one parametrised policy.
+    """
+    out = Path(folder)
+    written = [out / "pa_curves.png", out / "latency_curves.png", out / "urgency_latency.png"]
+    pa_curve_figure(report, written[0])
+    latency_curve_figure(report, written[1])
+    levels = {
+        c.condition: latency_by_urgency(ConditionRuns.from_log(log, c.condition))
+        for c in report.conditions
+    }
+    urgency_latency_figure(levels, written[2], time_unit=report.time_unit)
+    names = [c.condition for c in report.conditions]
+    if _sweepable(names):
+        written.append(out / "sweep.png")
+        sweep_figure(report, written[-1])
+    return written
