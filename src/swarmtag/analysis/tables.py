@@ -190,7 +190,7 @@ def relative_change(metric: str, baseline: float | None, value: float | None) ->
 
     >>> relative_change("p95_latency", 200.0, 150.0)  # 25 % lower latency: better
     0.25
-    >>> relative_change("pa", 0.4, 0.5)
+    >>> relative_change("pa", 0.5, 0.625)
     0.25
     """
     if metric not in SCALABILITY_METRICS:
