@@ -140,7 +140,7 @@ def _metrics(console: Console) -> None:
 
 @click.command()
 def demo() -> None:
-    """Show what swarmtag does so far: payloads, writes, selection, trial-log metrics."""
+    """A tour of the building blocks: tag payloads, writes, selection, trial-log metrics."""
     console = make_console()
     _payloads(console)
     _writes(console)

@@ -181,7 +181,9 @@ def _draw(
 )
 @click.option("--alpha", type=float, help="alpha of --policy urgency (> 0).")
 @click.option("--w", type=float, help="w of --policy weighted (0-1).")
-@click.option("--runs", type=click.IntRange(min=1), default=30, show_default=True)
+@click.option(
+    "--runs", type=click.IntRange(min=1), default=30, show_default=True, help="Runs per condition."
+)
 @click.option(
     "--run-offset",
     type=click.IntRange(min=0),
