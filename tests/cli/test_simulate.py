@@ -192,3 +192,12 @@ def test_trajectories_load_refuses_other_files(tmp_path):
     junk.write_bytes(b"not a zip")
     with pytest.raises(ConfigError, match="cannot read trajectories"):
         Trajectories.load(junk)
+
+
+def test_broken_toml_names_the_file_once(capsys, tmp_path):
+    config = tmp_path / "broken.toml"
+    config.write_text("robots = \n")
+    code, _, err = run(capsys, *SMALL, "--runs", "1", "--config", str(config))
+    assert code == 2
+    assert err.count(str(config)) == 1
+    assert "not valid TOML" in err

@@ -137,8 +137,9 @@ class Scenario:
         cls, path: str | os.PathLike[str], overrides: Mapping[str, Any] | None = None
     ) -> Scenario:
         """A scenario from a TOML file (the ``from_mapping`` layout), with ``overrides``."""
+        data = load_toml(path)  # its errors name the file already
         try:
-            return cls.from_mapping(load_toml(path), overrides)
+            return cls.from_mapping(data, overrides)
         except ConfigError as error:
             msg = f"{os.fspath(path)}: {error}"
             raise ConfigError(msg) from None
