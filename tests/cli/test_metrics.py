@@ -201,3 +201,18 @@ def test_markdown_into_missing_folder_is_refused_before_work(tmp_path, capsys):
     assert exited.value.code == 2
     assert "--markdown: folder" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_html_report_embeds_tables_and_figures(tmp_path, capsys):
+    from swarmtag.cli import main
+    from swarmtag.data import example_trial_path
+
+    path = tmp_path / "report.html"
+    with pytest.raises(SystemExit) as exited:
+        main(["metrics", str(example_trial_path()), "--resamples", "300", "--html", str(path)])
+    assert exited.value.code == 0
+    text = path.read_text(encoding="utf-8")
+    assert text.count("<table>") == 2
+    assert text.count("data:image/png;base64,") == 3
+    assert "example_trial.csv" in text
+    assert list(tmp_path.iterdir()) == [path]  # figures went to a temporary folder

@@ -7,6 +7,7 @@ p-values of 0 are shown as ``< 2/B``. Pure: strings in, strings out.
 
 from __future__ import annotations
 
+import html
 import math
 from collections.abc import Mapping, Sequence
 from typing import Final
@@ -20,10 +21,12 @@ __all__ = [
     "format_interval",
     "format_number",
     "format_p_value",
+    "html_tables",
     "latex_tables",
     "markdown_tables",
     "metric_label",
     "relative_change",
+    "scalability_html",
     "scalability_table",
     "unit_word",
 ]
@@ -185,6 +188,24 @@ def latex_tables(report: MetricsReport) -> str:
     return "\n\n".join(parts) + "\n"
 
 
+def _html(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in row) + "</tr>" for row in rows
+    )
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def html_tables(report: MetricsReport) -> str:
+    """The same tables as HTML ``<table>`` elements, with the note as a paragraph."""
+    header, values, diff_header, diffs = _rows(report)
+    parts = [_html(header, values)]
+    if diffs:
+        parts.append(_html(diff_header, diffs))
+    parts.append(f'<p class="note">{html.escape(_note(report))}</p>')
+    return "\n".join(parts)
+
+
 def relative_change(metric: str, baseline: float | None, value: float | None) -> float | None:
     """Relative change vs the baseline, signed so that positive is better.
 
@@ -202,14 +223,10 @@ def relative_change(metric: str, baseline: float | None, value: float | None) ->
     return SCALABILITY_METRICS[metric] * (value - baseline) / baseline
 
 
-def scalability_table(
-    reports: Mapping[str, MetricsReport], *, condition: str, markdown: bool = True
-) -> str:
-    """Per swarm size: baseline and ``condition`` values and the signed relative change.
+_SCALABILITY_HEADER: Final = ("Swarm", "Metric", "Baseline", "Condition", "Change (+ is better)")
 
-    ``reports`` maps a size label (``"5/10"``) to that size's report.
-    """
-    header = ["Swarm", "Metric", "Baseline", "Condition", "Change (+ is better)"]
+
+def _scalability_rows(reports: Mapping[str, MetricsReport], *, condition: str) -> list[list[str]]:
     rows = []
     for label, report in reports.items():
         base = report.condition(report.baseline).kpis
@@ -227,4 +244,21 @@ def scalability_table(
                     "n/a" if change is None else f"{100 * change:+.1f} %",
                 ]
             )
+    return rows
+
+
+def scalability_table(
+    reports: Mapping[str, MetricsReport], *, condition: str, markdown: bool = True
+) -> str:
+    """Per swarm size: baseline and ``condition`` values and the signed relative change.
+
+    ``reports`` maps a size label (``"5/10"``) to that size's report.
+    """
+    rows = _scalability_rows(reports, condition=condition)
+    header = _SCALABILITY_HEADER
     return (_markdown(header, rows) if markdown else _latex(header, rows)) + "\n"
+
+
+def scalability_html(reports: Mapping[str, MetricsReport], *, condition: str) -> str:
+    """The scalability table as an HTML ``<table>``."""
+    return _html(_SCALABILITY_HEADER, _scalability_rows(reports, condition=condition))

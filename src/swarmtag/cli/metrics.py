@@ -3,25 +3,30 @@
 from __future__ import annotations
 
 import json
+import tempfile
 from pathlib import Path
 
 import click
 from rich.console import Console, JustifyMethod
 from rich.table import Table
 
+from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
 from swarmtag.analysis import METRICS, MetricsReport, summarize
+from swarmtag.analysis.html import Section, write_html
 from swarmtag.analysis.tables import (
     format_interval,
     format_p_value,
+    html_tables,
     latex_tables,
     markdown_tables,
     metric_label,
+    unit_word,
 )
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, resamples_option
 from swarmtag.errors import ConfigError
-from swarmtag.io import read_event_log
+from swarmtag.io import CarrierLog, read_event_log
 
 __all__ = ["metrics"]
 
@@ -108,6 +113,31 @@ def render_report(report: MetricsReport, console: Console) -> None:
     )
 
 
+def _write_html(path: Path, events: Path, report: MetricsReport, log: CarrierLog) -> None:
+    """One-section HTML report of an event log: tables and embedded figures."""
+    from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
+
+    with tempfile.TemporaryDirectory() as folder:
+        section = Section(
+            title=f"Event log {events.name}",
+            facts={
+                "conditions": ", ".join(c.condition for c in report.conditions),
+                "runs": ", ".join(f"{c.condition} {c.kpis.runs}" for c in report.conditions),
+                "baseline": report.baseline,
+                "time unit": unit_word(report.time_unit),
+                "bootstrap": f"{report.n_resamples} resamples over runs, seed {report.seed}",
+            },
+            tables_html=[html_tables(report)],
+            figures=write_figures(report, log, folder),
+        )
+        write_html(
+            path,
+            f"swarmtag metrics: {events.name}",
+            [section],
+            facts={"swarmtag": __version__, "source": str(events)},
+        )
+
+
 @click.command("metrics")
 @click.argument("events", metavar="EVENTS", type=click.Path(path_type=Path))
 @baseline_option
@@ -128,6 +158,12 @@ def render_report(report: MetricsReport, console: Console) -> None:
 )
 @click.option("--latex", type=click.Path(path_type=Path), help="Also write the tables as LaTeX.")
 @click.option(
+    "--html",
+    "html_out",
+    type=click.Path(path_type=Path),
+    help="Also write one self-contained HTML report: the tables and every figure.",
+)
+@click.option(
     "--figures",
     type=click.Path(file_okay=False, path_type=Path),
     help="Also draw the PA and latency curves with bands, latency per urgency level and, "
@@ -142,6 +178,7 @@ def metrics(
     as_json: bool,
     markdown: Path | None,
     latex: Path | None,
+    html_out: Path | None,
     figures: Path | None,
 ) -> None:
     """KPIs of an event log EVENTS (.csv or .parquet) with 95 % bootstrap CIs over runs.
@@ -151,7 +188,7 @@ def metrics(
     deliveries and undelivered carriers. Each other condition is compared with
     the baseline: difference with CI, bootstrap p-value and Mann-Whitney U.
     """
-    for option, path in (("--markdown", markdown), ("--latex", latex)):
+    for option, path in (("--markdown", markdown), ("--latex", latex), ("--html", html_out)):
         if path is not None and not path.parent.is_dir():
             raise ConfigError(f"{option}: folder {str(path.parent)!r} does not exist")
     log = read_event_log(events)
@@ -168,6 +205,9 @@ def metrics(
 
         figures.mkdir(parents=True, exist_ok=True)
         written += [f"figure: {path}" for path in write_figures(report, log, figures)]
+    if html_out is not None:
+        _write_html(html_out, events, report, log)
+        written.append(f"HTML report: {html_out}")
     if as_json:
         click.echo(json.dumps(report.to_json(), allow_nan=False))
         for line in written:
