@@ -101,8 +101,8 @@ def test_race_loser_abandons_on_the_status_it_hears_next_tick():
     result = run_script(params, scene, 25)
     # robot 0 stands on the east predock point facing the carrier: docks at tick 1,
     # drives 0.3525 m in, arriving within 0.01 m after 7 ticks (tick 8), centres 10
-    # ticks and lifts at tick 18. Robot 1 docks from the north and is blocked by robot 0;
-    # it hears PICKED_UP at tick 19 and abandons.
+    # ticks and lifts at tick 18. Robot 1 reaches the north predock point while robot 0
+    # is under the carrier, so it waits there; it hears PICKED_UP at tick 19 and abandons.
     assert event_rows(result) == [
         (1, "select", 0, 0),
         (1, "select", 1, 0),
@@ -112,6 +112,47 @@ def test_race_loser_abandons_on_the_status_it_hears_next_tick():
     abandon = result.events.take(result.events.kind == "abandon")
     assert abandon.value.tolist() == [float(TagStatus.PICKED_UP)]
     assert result.final_state.mode[0, 1] == Mode.WALK
+
+
+WEST_PREDOCK = (0.6 - 0.3525, 2.0)
+
+
+@pytest.mark.parametrize("ticks", [1, 17])
+def test_one_robot_under_a_carrier_the_other_waits_at_its_predock_point(ticks):
+    # Both robots stand on opposite predock points facing the carrier and select it at
+    # tick 1; both arrive in that tick, so the smaller id (robot 0) drives in and robot 1
+    # waits in PREDOCK where it is, for as long as robot 0 is docking and centring.
+    params = params_for(robots=2, carriers=1)
+    scene = Scene.build(
+        robots=[EAST_PREDOCK, WEST_PREDOCK],
+        heading=[(-1.0, 0.0), (1.0, 0.0)],
+        carriers=[CARRIER],
+        urgency=[4],
+    )
+    result = run_script(params, scene, ticks)
+    mode = result.final_state.mode[0]
+    assert mode[0] in (Mode.DOCK, Mode.CENTRE)
+    assert mode[1] == Mode.PREDOCK
+    assert result.final_state.robot_pos[0, 1].tolist() == pytest.approx(list(WEST_PREDOCK))
+
+
+def test_the_waiting_robot_abandons_when_it_hears_the_lift():
+    params = params_for(robots=2, carriers=1)
+    scene = Scene.build(
+        robots=[EAST_PREDOCK, WEST_PREDOCK],
+        heading=[(-1.0, 0.0), (1.0, 0.0)],
+        carriers=[CARRIER],
+        urgency=[4],
+    )
+    result = run_script(params, scene, 25)
+    # robot 0: docks at tick 1, centre after 7 ticks (tick 8), lifts at tick 18.
+    assert event_rows(result) == [
+        (1, "select", 0, 0),
+        (1, "select", 1, 0),
+        (18, "lift", 0, 0),
+        (19, "abandon", 1, 0),
+    ]
+    assert "timeout" not in result.events.kind.tolist()
 
 
 def test_pursuit_timeout_then_cooldown_bars_the_carrier():

@@ -4,7 +4,10 @@ In this order, from the positions after collisions:
 
 1. timers of robots already centring, lifting or releasing count down;
 2. a robot in PREDOCK within ``arrival_tolerance`` of its predock point and
-   facing the carrier drives in (DOCK); a robot in DOCK within that distance
+   facing the carrier drives in (DOCK), unless another robot is already
+   docking, centring or lifting under that carrier (it waits where it is;
+   of several arriving in the same tick the smallest id goes in); a robot
+   in DOCK within that distance
    of the carrier centre is snapped onto it and centres for ``dock_ticks``
    (CENTRE);
 3. a robot whose centring is over lifts: the tag accepts the robot's write
@@ -53,6 +56,29 @@ ROBOT_WRITE_ALLOWED: Final = _transition_table()
 """``[from, to]``: may a robot write this status change (``tag.ROBOT_TRANSITIONS`` as a table)."""
 
 
+_DOCK_TAKEN: Final = (Mode.DOCK, Mode.CENTRE, Mode.LIFT)
+
+
+def _dock_free(s: WorldState, arriving: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Which arriving robots may drive in: nobody under their carrier, and no smaller id arriving.
+
+    Only one robot fits under a carrier; a robot at its predock point sees one
+    already there with its range sensors and waits (it abandons when it hears
+    the lift, or times out).
+    """
+    runs, robots = s.mode.shape
+    target = np.maximum(s.target, 0)
+    inside = in_modes(s.mode, _DOCK_TAKEN)
+    taken = np.zeros((runs, s.carrier_pos.shape[1]), dtype=bool)
+    rows, ids = np.nonzero(inside)
+    taken[rows, target[rows, ids]] = True
+    free = arriving & ~taken[np.arange(runs)[:, None], target]
+    same = free[:, :, None] & free[:, None, :] & (target[:, :, None] == target[:, None, :])
+    smaller = np.tri(robots, k=-1, dtype=bool)  # [i, j]: j < i
+    first: NDArray[np.bool_] = free & ~(same & smaller).any(axis=2)
+    return first
+
+
 def _arrivals(s: WorldState, params: Params) -> None:
     centre = at_robots(s.carrier_pos, s.target)
     normal = FACE_NORMALS[np.maximum(s.face, 0)]
@@ -63,6 +89,7 @@ def _arrivals(s: WorldState, params: Params) -> None:
         & (length(s.robot_pos - predock) <= params.arrival_tolerance)
         & facing
     )
+    at_predock &= _dock_free(s, at_predock)
     at_centre = (s.mode == Mode.DOCK) & (length(s.robot_pos - centre) <= params.arrival_tolerance)
     s.mode[at_predock] = Mode.DOCK
     s.ghost[at_predock] = s.target[at_predock]
