@@ -25,9 +25,11 @@ what to do instead.
     ├── EventLogError (ValueError)          an event log breaks the schema (names file, row, column)
     ├── StatisticsError (ValueError)        statistics input refused (no runs, unknown baseline)
     ├── ConfigError (ValueError)            a simulation scenario value or key is not allowed
-    └── SimulationError (RuntimeError)      a simulation broke one of its own contracts
-        ├── InvariantError                  a world-state invariant failed (checking mode)
-        └── DeterminismError                a run differed between two ways of computing it
+    ├── SimulationError (RuntimeError)      a simulation broke one of its own contracts
+    │   ├── InvariantError                  a world-state invariant failed (checking mode)
+    │   └── DeterminismError                a run differed between two ways of computing it
+    ├── StudyError (ValueError)             a study file or option is not allowed (names the key)
+    └── StoreError (RuntimeError)           the results store cannot be opened or is inconsistent
 """
 
 from __future__ import annotations
@@ -50,6 +52,8 @@ __all__ = [
     "SimulationError",
     "StateRecordError",
     "StatisticsError",
+    "StoreError",
+    "StudyError",
     "SwarmtagError",
     "UnknownStatusError",
     "UrgencyRangeError",
@@ -165,3 +169,11 @@ class InvariantError(SimulationError):
 
 class DeterminismError(SimulationError):
     """A run gave different results alone, in a batch or in another process."""
+
+
+class StudyError(SwarmtagError, ValueError):
+    """A study file or study option is not allowed; the message names the file and the key."""
+
+
+class StoreError(SwarmtagError, RuntimeError):
+    """The results store cannot be opened, or holds rows that contradict its own keys."""

@@ -11,6 +11,7 @@ from swarmtag import __version__
 from swarmtag.cli.demo import demo
 from swarmtag.cli.metrics import metrics
 from swarmtag.cli.simulate import simulate_cmd
+from swarmtag.cli.study import study
 from swarmtag.cli.tag import tag
 from swarmtag.errors import SwarmtagError
 
@@ -32,6 +33,7 @@ app.add_command(tag)
 app.add_command(demo)
 app.add_command(metrics)
 app.add_command(simulate_cmd)
+app.add_command(study)
 
 
 def _one_line(text: str) -> str:

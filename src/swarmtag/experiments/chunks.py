@@ -1,0 +1,63 @@
+"""Chunks: the unit of work of a study (consecutive runs of one condition on one scale).
+
+A ``ChunkJob`` carries everything needed to compute it, so it can be pickled
+to a worker process or a Dask worker; ``simulate_chunk`` is a pure function
+of the job. ``split_runs`` turns a sorted list of missing runs into chunks.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+
+from swarmtag.experiments.store import RunKey
+from swarmtag.io import CarrierLog, EventTable
+from swarmtag.policy import parse_policy
+from swarmtag.sim import Scenario, simulate
+
+__all__ = ["ChunkJob", "ChunkResult", "simulate_chunk", "split_runs"]
+
+ChunkResult = tuple[CarrierLog, EventTable]
+"""A chunk's carrier log and event table, as ``simulate`` returns them."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChunkJob:
+    """One unit of work: ``runs`` consecutive runs from ``run_offset`` of one condition.
+
+    Holds everything a worker needs (it is pickled to worker processes) and
+    the store key its results go under.
+    """
+
+    key: RunKey
+    scenario: Scenario
+    condition: str
+    run_offset: int
+    runs: int
+
+
+def simulate_chunk(job: ChunkJob) -> ChunkResult:
+    """Simulate one chunk; a pure function of the job (run in worker processes)."""
+    result = simulate(
+        job.scenario,
+        parse_policy(job.condition),
+        seed=job.key.seed,
+        runs=job.runs,
+        run_offset=job.run_offset,
+    )
+    return result.carriers, result.events
+
+
+def split_runs(runs: Sequence[int], size: int) -> Iterator[tuple[int, int]]:
+    """``(offset, count)`` spans of consecutive runs, at most ``size`` each, covering ``runs``.
+
+    >>> list(split_runs([0, 1, 2, 3, 4, 7, 8], 2))
+    [(0, 2), (2, 2), (4, 1), (7, 2)]
+    """
+    start = 0
+    while start < len(runs):
+        end = start + 1
+        while end < len(runs) and end - start < size and runs[end] == runs[end - 1] + 1:
+            end += 1
+        yield runs[start], end - start
+        start = end

@@ -1,0 +1,179 @@
+"""Running a study: plan chunks of missing runs, simulate them in parallel, store, summarise.
+
+``run_study`` splits every (scale, condition) of a study into chunks of at
+most ``study.chunk_runs`` consecutive runs, asks the results store which runs
+are missing, simulates only those chunks (in worker processes on the local
+cores, in this process with ``workers=1``, or on a Dask cluster), and writes each finished chunk
+to the store from this process in one transaction. A study interrupted at any
+moment therefore resumes where it stopped, and its results do not depend on
+the number of workers, the chunk size or the interruptions: run ``i`` of seed
+``S`` is the same alone or in any batch (``swarmtag.sim.simulate``), and the
+store gives rows back in simulated order.
+
+Output folder layout::
+
+    DIR/results.duckdb                    the results store (every study, every run)
+    DIR/<study>/progress.json             runs stored / total, rewritten after each chunk
+    DIR/<study>/<scale>/metrics.json      summarize(...).to_json() of the scale
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+from swarmtag._atomic import atomic_write_bytes
+from swarmtag.analysis import summarize
+from swarmtag.errors import StudyError
+from swarmtag.experiments.chunks import ChunkJob, ChunkResult, split_runs
+from swarmtag.experiments.execute import run_dask, run_local
+from swarmtag.experiments.spec import Study
+from swarmtag.experiments.store import ResultsStore, RunKey
+
+__all__ = ["QUICK_RESAMPLES", "STORE_NAME", "StudyResult", "plan_chunks", "run_study", "study_key"]
+
+STORE_NAME: Final = "results.duckdb"
+"""File name of the results store inside the output folder."""
+QUICK_RESAMPLES: Final = 1000
+"""Bootstrap resamples under ``quick`` (at most; a study asking fewer keeps its own)."""
+
+
+def study_key(study: Study, scale: str) -> RunKey:
+    """The store key of one scale of ``study``."""
+    return RunKey(
+        study=study.name,
+        scale=scale,
+        seed=study.seed,
+        code_version=study.scale(scale).code_version,
+    )
+
+
+def plan_chunks(study: Study, store: ResultsStore, *, quick: bool = False) -> list[ChunkJob]:
+    """The chunks of runs ``study`` still needs, in (scale, condition, run) order."""
+    total = study.run_count(quick=quick)
+    jobs: list[ChunkJob] = []
+    for scale in study.scales:
+        key = study_key(study, scale.key)
+        for condition in study.conditions:
+            missing = store.missing_runs(key, condition, range(total))
+            jobs.extend(
+                ChunkJob(
+                    key=key,
+                    scenario=scale.scenario,
+                    condition=condition,
+                    run_offset=offset,
+                    runs=count,
+                )
+                for offset, count in split_runs(missing, study.chunk_runs)
+            )
+    return jobs
+
+
+@dataclass(frozen=True, kw_only=True)
+class StudyResult:
+    """What ``run_study`` did: where results went, runs computed and reused, metrics per scale."""
+
+    study: str
+    store: Path
+    metrics_paths: dict[str, Path]
+    metrics: dict[str, dict[str, Any]]
+    computed_runs: int
+    reused_runs: int
+
+
+def _cost(job: ChunkJob) -> int:
+    """A rough cost of a chunk (run-ticks times bodies): the costliest are started first.
+
+    Scheduling big chunks first keeps every worker busy until the end; the
+    order changes no result.
+    """
+    scenario = job.scenario
+    return job.runs * scenario.run_ticks * (scenario.robots + scenario.carriers)
+
+
+def _write_progress(path: Path, done: int, total: int) -> None:
+    atomic_write_bytes(path, json.dumps({"done": done, "total": total}).encode() + b"\n")
+
+
+def run_study(
+    study: Study,
+    *,
+    out_dir: str | os.PathLike[str],
+    quick: bool = False,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = False,
+) -> StudyResult:
+    """Compute the runs of ``study`` missing from the store in ``out_dir``, then its metrics.
+
+    ``workers`` processes (default ``os.cpu_count()``) simulate chunks, or
+    the Dask distributed cluster whose scheduler is at ``scheduler``
+    (``"tcp://host:8786"``); results are identical either way. ``quick``
+    runs ``study.quick_runs`` per condition and at most ``QUICK_RESAMPLES``
+    bootstrap resamples.
+    Returns where everything went; writes ``metrics.json`` per scale.
+    """
+    if workers is not None and scheduler is not None:
+        raise StudyError("workers: a Dask cluster has its own workers; give workers or scheduler")
+    if workers is not None and workers < 1:
+        msg = f"workers: {workers} is not an integer >= 1"
+        raise StudyError(msg)
+    folder = Path(out_dir)
+    if not folder.parent.is_dir():
+        msg = f"out_dir: folder {str(folder.parent)!r} does not exist"
+        raise StudyError(msg)
+    study_dir = folder / study.name
+    study_dir.mkdir(parents=True, exist_ok=True)
+    progress_path = study_dir / "progress.json"
+    runs = study.run_count(quick=quick)
+    total = runs * len(study.conditions) * len(study.scales)
+    with ResultsStore(folder / STORE_NAME) as store:
+        jobs = sorted(plan_chunks(study, store, quick=quick), key=_cost, reverse=True)
+        todo = sum(job.runs for job in jobs)
+        done = total - todo
+        _write_progress(progress_path, done, total)
+        columns = (
+            TextColumn(study.name),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("runs"),
+            TimeRemainingColumn(),
+        )
+        with Progress(*columns, disable=not progress, transient=True) as bar:
+            task = bar.add_task(study.name, total=total, completed=done)
+
+            def store_chunk(job: ChunkJob, logs: ChunkResult) -> None:
+                nonlocal done
+                done += store.write_chunk(job.key, *logs)
+                _write_progress(progress_path, done, total)
+                bar.update(task, completed=done)
+
+            if scheduler is not None:
+                run_dask(jobs, scheduler, store_chunk)
+            else:
+                run_local(jobs, workers or os.cpu_count() or 1, store_chunk)
+        metrics: dict[str, dict[str, Any]] = {}
+        paths: dict[str, Path] = {}
+        resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
+        for scale in study.scales:
+            log = store.load_log(study_key(study, scale.key), study.conditions, runs)
+            report = summarize(log, baseline=study.baseline, n_resamples=resamples, seed=study.seed)
+            metrics[scale.key] = report.to_json()
+            path = study_dir / scale.key / "metrics.json"
+            path.parent.mkdir(exist_ok=True)
+            text = json.dumps(metrics[scale.key], indent=2, allow_nan=False) + "\n"
+            atomic_write_bytes(path, text.encode())
+            paths[scale.key] = path
+    return StudyResult(
+        study=study.name,
+        store=folder / STORE_NAME,
+        metrics_paths=paths,
+        metrics=metrics,
+        computed_runs=todo,
+        reused_runs=total - todo,
+    )

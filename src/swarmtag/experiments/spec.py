@@ -1,0 +1,350 @@
+"""Study specifications: what a study runs, read from a TOML file and validated at the edge.
+
+A study is a set of conditions (canonical policy names) run on one scenario,
+or on several *scales* (one scenario each, as in the scalability study), for
+a number of runs from one master seed. Every field is checked when the study
+is built, and a refusal is a ``StudyError`` naming the file and the key
+(``study.toml: conditions[2]: 'urgency:alpa=3' is not a condition ...``), so
+a long study never fails an hour in on a typo.
+
+The file layout (every key but ``name``, ``conditions`` and ``runs`` optional)::
+
+    name = "controller-selection"
+    description = "SPEC §6: proximity against urgency-aware selection"
+    conditions = ["proximity", "urgency:alpha=0.7", "urgency:alpha=3.0"]
+    baseline = "proximity"      # default: the first condition
+    runs = 100
+    quick_runs = 10             # runs under --quick (default: min(runs, 10))
+    ticks = 3000                # run length; the time limit for static urgency
+    urgency = "growing"         # urgency model: "growing" or "static"
+    seed = 0                    # master seed of the runs and of the bootstrap
+    resamples = 10000           # bootstrap resamples of the metrics
+    chunk_runs = 10             # runs per unit of work (results do not depend on it)
+
+    [scenario]                  # swarmtag.sim.Scenario.from_mapping layout
+    robots = 3
+    carriers = 7
+
+    [scales."5x10"]             # optional: one scenario per scale, merged onto [scenario]
+    robots = 5
+    carriers = 10
+    ticks = 3000                # a scale may set its own run length
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import os
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+from swarmtag import __version__
+from swarmtag.errors import ConfigError, PolicyError, StudyError
+from swarmtag.policy import Policy, parse_policy
+from swarmtag.sim import Scenario
+
+__all__ = ["DEFAULT_SCALE", "URGENCY_MODELS", "Scale", "Study", "read_study_file"]
+
+DEFAULT_SCALE: Final = "default"
+"""Key of the single scale of a study file without a ``[scales]`` table."""
+URGENCY_MODELS: Final = ("growing", "static")
+"""The urgency models a study may name (``swarmtag.sim.UrgencyModel.model``)."""
+_REQUIRED: Final = ("name", "conditions", "runs")
+_KEYS: Final = (
+    "name",
+    "description",
+    "conditions",
+    "baseline",
+    "runs",
+    "quick_runs",
+    "ticks",
+    "urgency",
+    "seed",
+    "resamples",
+    "chunk_runs",
+    "scenario",
+    "scales",
+)
+_SAFE_NAME: Final = re.compile(r"[A-Za-z0-9._-]+")
+_DEFAULT_TICKS: Final = 3000
+_DEFAULT_QUICK: Final = 10
+# Keys the study sets itself: a scenario table naming them would be silently overridden.
+_STUDY_OWNED: Final = ("ticks",)
+
+
+def _int(value: object, key: str, *, low: int) -> int:
+    if isinstance(value, int) and not isinstance(value, bool) and value >= low:
+        return value
+    msg = f"{key}: {value!r} is not an integer >= {low}"
+    raise StudyError(msg)
+
+
+def _text(value: object, key: str) -> str:
+    if not isinstance(value, str) or not value.strip():
+        msg = f"{key}: {value!r} is not a non-empty string"
+        raise StudyError(msg)
+    return value
+
+
+def _folder_name(value: object, key: str) -> str:
+    """A name used as a folder of the results: letters, digits, ``.``, ``_`` and ``-`` only."""
+    text = _text(value, key)
+    if not _SAFE_NAME.fullmatch(text) or text in {".", ".."}:
+        msg = f"{key}: {text!r} may hold only letters, digits, '.', '_' and '-' (it names a folder)"
+        raise StudyError(msg)
+    return text
+
+
+def _table(value: object, key: str) -> dict[str, Any]:
+    if not isinstance(value, Mapping):
+        msg = f"{key}: {value!r} is not a table of keys"
+        raise StudyError(msg)
+    return dict(value)
+
+
+_MODEL_PACKAGES: Final = ("sim", "policy", "tag", "io")
+"""Sub-packages whose source decides a simulated run's rows."""
+
+
+@functools.cache
+def model_digest() -> str:
+    """First 12 hex digits of a SHA-256 over the model's source files (paths and bytes)."""
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for package in _MODEL_PACKAGES:
+        for path in sorted((root / package).rglob("*.py")):
+            digest.update(path.relative_to(root).as_posix().encode() + b"\0")
+            digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()[:12]
+
+
+def _scenario_hash(mapping: Mapping[str, Any]) -> str:
+    """12 hex digits of the SHA-256 of the scenario's canonical JSON."""
+    text = json.dumps(mapping, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+@dataclass(frozen=True)
+class Scale:
+    """One scenario of a study, under a key (``"default"``, or e.g. ``"5x10"`` for a swarm size).
+
+    ``code_version`` is ``swarmtag.__version__`` plus a hash of the full
+    scenario mapping: stored runs are reused only while both are unchanged.
+    """
+
+    key: str
+    scenario: Scenario
+
+    @property
+    def code_version(self) -> str:
+        """``"<version>+<scenario hash>.<model hash>"``, part of every stored run's key.
+
+        The model hash covers the source of everything that decides a run's
+        rows, so a changed kernel never reuses runs stored by the old one.
+        """
+        return f"{__version__}+{_scenario_hash(self.scenario.to_mapping())}.{model_digest()}"
+
+
+@dataclass(frozen=True)
+class Study:
+    """A validated study: conditions, scales, run counts, seed and baseline (all checked).
+
+    Build one with ``Study.from_mapping`` (a TOML table) or ``swarmtag.experiments.load_study``.
+    """
+
+    name: str
+    conditions: tuple[str, ...]
+    scales: tuple[Scale, ...]
+    runs: int
+    quick_runs: int
+    seed: int = 0
+    baseline: str = ""  # empty: the first condition
+    urgency: str = "growing"
+    resamples: int = 10_000
+    chunk_runs: int = 10
+    description: str = ""
+    source: str | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        _folder_name(self.name, "name")
+        object.__setattr__(self, "conditions", _conditions(list(self.conditions)))
+        object.__setattr__(self, "scales", tuple(self.scales))
+        if not self.scales:
+            raise StudyError("scales: a study needs at least one scale")
+        keys = [scale.key for scale in self.scales]
+        for scale in self.scales:
+            _folder_name(scale.key, f"scales.{scale.key}")
+            if keys.count(scale.key) > 1:
+                msg = f"scales.{scale.key}: the key is used twice"
+                raise StudyError(msg)
+        if self.urgency not in URGENCY_MODELS:
+            msg = f"urgency: {self.urgency!r} is not one of {', '.join(URGENCY_MODELS)}"
+            raise StudyError(msg)
+        _int(self.runs, "runs", low=1)
+        _int(self.quick_runs, "quick_runs", low=1)
+        if self.quick_runs > self.runs:
+            msg = f"quick_runs: {self.quick_runs} is more than runs ({self.runs})"
+            raise StudyError(msg)
+        _int(self.seed, "seed", low=0)
+        _int(self.resamples, "resamples", low=1)
+        _int(self.chunk_runs, "chunk_runs", low=1)
+        if not self.baseline:
+            object.__setattr__(self, "baseline", self.conditions[0])
+        if self.baseline not in self.conditions:
+            msg = (
+                f"baseline: {self.baseline!r} is not one of the conditions {list(self.conditions)}"
+            )
+            raise StudyError(msg)
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any], *, source: str | None = None) -> Study:
+        """A study from a TOML-layout mapping; ``source`` (a file name) prefixes every message."""
+        try:
+            return cls._parse(data, source)
+        except (StudyError, ConfigError) as error:
+            prefix = f"{source}: " if source else ""
+            raise StudyError(f"{prefix}{error}") from None
+
+    @classmethod
+    def _parse(cls, data: Mapping[str, Any], source: str | None) -> Study:
+        data = _table(data, "study")
+        for key in data:
+            if key not in _KEYS:
+                msg = f"{key}: unknown key; a study has keys {', '.join(_KEYS)}"
+                raise StudyError(msg)
+        for key in _REQUIRED:
+            if key not in data:
+                msg = f"{key}: missing; a study needs {', '.join(_REQUIRED)}"
+                raise StudyError(msg)
+        conditions = _conditions(data["conditions"])
+        runs = _int(data["runs"], "runs", low=1)
+        urgency = data.get("urgency", "growing")
+        if urgency not in URGENCY_MODELS:
+            msg = f"urgency: {urgency!r} is not one of {', '.join(URGENCY_MODELS)}"
+            raise StudyError(msg)
+        _folder_name(data["name"], "name")
+        ticks = _int(data.get("ticks", _DEFAULT_TICKS), "ticks", low=1)
+        return cls(
+            name=_text(data["name"], "name"),
+            description=str(data.get("description", "")),
+            conditions=conditions,
+            baseline=_text(data.get("baseline", conditions[0]), "baseline"),
+            runs=runs,
+            quick_runs=_int(data.get("quick_runs", min(runs, _DEFAULT_QUICK)), "quick_runs", low=1),
+            seed=_int(data.get("seed", 0), "seed", low=0),
+            resamples=_int(data.get("resamples", 10_000), "resamples", low=1),
+            chunk_runs=_int(data.get("chunk_runs", 10), "chunk_runs", low=1),
+            urgency=urgency,
+            scales=_scales(data, urgency, ticks),
+            source=source,
+        )
+
+    def policies(self) -> tuple[Policy, ...]:
+        """The conditions as policies, in the study's order."""
+        return tuple(parse_policy(name) for name in self.conditions)
+
+    def scale(self, key: str) -> Scale:
+        """The scale under ``key``; ``StudyError`` naming the keys there are otherwise."""
+        for scale in self.scales:
+            if scale.key == key:
+                return scale
+        msg = f"scale {key!r}: not in study {self.name!r} (scales: {self.scale_keys})"
+        raise StudyError(msg)
+
+    @property
+    def scale_keys(self) -> tuple[str, ...]:
+        """The scales' keys in file order."""
+        return tuple(scale.key for scale in self.scales)
+
+    def run_count(self, *, quick: bool = False) -> int:
+        """Runs per condition and scale: ``quick_runs`` under ``quick``, else ``runs``."""
+        return self.quick_runs if quick else self.runs
+
+
+def _conditions(value: object) -> tuple[str, ...]:
+    if not isinstance(value, list) or not value:
+        msg = f"conditions: {value!r} is not a non-empty list of condition names"
+        raise StudyError(msg)
+    names: list[str] = []
+    for index, item in enumerate(value):
+        key = f"conditions[{index}]"
+        if not isinstance(item, str):
+            msg = f"{key}: {item!r} is not a condition name (a string)"
+            raise StudyError(msg)
+        try:
+            policy = parse_policy(item)
+        except PolicyError as error:
+            msg = (
+                f"{key}: {item!r} is not a condition (e.g. proximity, urgency:alpha=0.7, "
+                f"weighted:w=0.3): {error}"
+            )
+            raise StudyError(msg) from None
+        if policy.name in names:
+            msg = f"{key}: {item!r} repeats condition {policy.name!r}"
+            raise StudyError(msg)
+        names.append(policy.name)
+    return tuple(names)
+
+
+def _scale_scenario(
+    base: Mapping[str, Any], extra: Mapping[str, Any], where: str, urgency: str, ticks: int
+) -> Scenario:
+    """The scenario of one scale: the base table, the scale's keys, then run length and model."""
+    overrides: dict[str, Any] = {key: value for key, value in extra.items() if key != "ticks"}
+    run_length = _int(extra.get("ticks", ticks), f"{where}.ticks", low=1)
+    overrides["urgency.model"] = urgency
+    if urgency == "growing":
+        overrides["ticks"] = run_length
+    else:
+        overrides["urgency.static_time_limit"] = run_length
+    try:
+        return Scenario.from_mapping(base, overrides)
+    except ConfigError as error:
+        raise StudyError(f"{where}: {error}") from None
+
+
+def _scales(data: Mapping[str, Any], urgency: str, ticks: int) -> tuple[Scale, ...]:
+    base = _table(data.get("scenario", {}), "scenario")
+    for key in _STUDY_OWNED:
+        if key in base:
+            msg = f"scenario.{key}: set the study's top-level '{key}' (or a scale's) instead"
+            raise StudyError(msg)
+    urgency_table = base.get("urgency")
+    if isinstance(urgency_table, Mapping) and "model" in urgency_table:
+        raise StudyError("scenario.urgency.model: set the study's top-level 'urgency' instead")
+    if "scales" not in data:
+        return (Scale(DEFAULT_SCALE, _scale_scenario(base, {}, "scenario", urgency, ticks)),)
+    tables = _table(data["scales"], "scales")
+    if not tables:
+        raise StudyError("scales: the table is empty; remove it or name at least one scale")
+    return tuple(
+        Scale(
+            key,
+            _scale_scenario(base, _table(extra, f"scales.{key}"), f"scales.{key}", urgency, ticks),
+        )
+        for key, extra in tables.items()
+    )
+
+
+def read_study_file(path: str | os.PathLike[str]) -> Study:
+    """Read and validate a study TOML file; every refusal is a ``StudyError`` naming the file."""
+    name = os.fspath(path)
+    try:
+        with Path(path).open("rb") as handle:
+            data = tomllib.load(handle)
+    except FileNotFoundError:
+        msg = f"{name}: no such study file"
+        raise StudyError(msg) from None
+    except OSError as error:
+        msg = f"{name}: cannot read ({error.strerror})"
+        raise StudyError(msg) from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        msg = f"{name}: not valid TOML ({error})"
+        raise StudyError(msg) from None
+    return Study.from_mapping(data, source=Path(path).name)
