@@ -16,12 +16,14 @@ $(STAMP): pyproject.toml
 DEMO_OUT ?= out/demo
 
 # The main job: proximity vs urgency(alpha=0.7), 40 runs of 3 robots / 7 carriers,
-# KPI table with CIs, event log, a snapshot and an animation of run 0 per condition.
+# KPI table with CIs, event log, a snapshot and an animation of run 0 per condition;
+# then the quick reproduction of all five published studies and its HTML report.
 demo: $(STAMP)
 	mkdir -p $(DEMO_OUT)
 	$(BIN)/swarmtag simulate --runs 40 --condition proximity --condition urgency:alpha=0.7 \
 		--events $(DEMO_OUT)/events.csv --snapshot $(DEMO_OUT)/snapshot.png \
 		--animate $(DEMO_OUT)/run.gif
+	$(BIN)/swarmtag reproduce --quick --out $(DEMO_OUT)/reproduction
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks

@@ -23,6 +23,7 @@ _STYLE: Final = """
 body { font-family: system-ui, sans-serif; max-width: 70em; margin: 2em auto; color: #222; }
 h1 { font-size: 1.6em; } h2 { font-size: 1.3em; margin-top: 2em; border-bottom: 1px solid #ccc; }
 table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
+table { display: block; overflow-x: auto; max-width: 100%; }
 th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }
 th:first-child, td:first-child { text-align: left; }
 thead { background: #f3f3f3; } .note { color: #555; font-size: 0.85em; }

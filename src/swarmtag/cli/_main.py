@@ -11,7 +11,7 @@ from swarmtag import __version__
 from swarmtag.cli.demo import demo
 from swarmtag.cli.metrics import metrics
 from swarmtag.cli.simulate import simulate_cmd
-from swarmtag.cli.study import study
+from swarmtag.cli.study import reproduce, study
 from swarmtag.cli.tag import tag
 from swarmtag.errors import SwarmtagError
 
@@ -34,6 +34,7 @@ app.add_command(demo)
 app.add_command(metrics)
 app.add_command(simulate_cmd)
 app.add_command(study)
+app.add_command(reproduce)
 
 
 def _one_line(text: str) -> str:

@@ -3,11 +3,32 @@
 from __future__ import annotations
 
 import sys
+import time
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import click
 
-__all__ = ["study"]
+from swarmtag.errors import StudyError
+
+__all__ = ["reproduce", "study"]
+
+workers_option = click.option(
+    "--workers",
+    type=click.IntRange(min=1),
+    help="Worker processes [default: the number of CPU cores].",
+)
+scheduler_option = click.option(
+    "--scheduler",
+    metavar="ADDRESS",
+    help="Run on the Dask distributed cluster with this scheduler (tcp://host:8786).",
+)
+progress_option = click.option(
+    "--progress/--no-progress",
+    default=None,
+    help="Show a progress bar [default: only on a terminal].",
+)
 
 
 @click.group("study")
@@ -26,21 +47,9 @@ def study() -> None:
     help="Results folder: the store (results.duckdb) and per-study metrics.",
 )
 @click.option("--quick", is_flag=True, help="Run the study's quick_runs per condition only.")
-@click.option(
-    "--workers",
-    type=click.IntRange(min=1),
-    help="Worker processes [default: the number of CPU cores].",
-)
-@click.option(
-    "--scheduler",
-    metavar="ADDRESS",
-    help="Run on the Dask distributed cluster with this scheduler (tcp://host:8786).",
-)
-@click.option(
-    "--progress/--no-progress",
-    default=None,
-    help="Show a progress bar [default: only on a terminal].",
-)
+@workers_option
+@scheduler_option
+@progress_option
 def run_cmd(
     *,
     source: str,
@@ -70,3 +79,102 @@ def run_cmd(
     click.echo(f"results store: {result.store}")
     for scale, path in result.metrics_paths.items():
         click.echo(f"metrics ({scale}): {path}")
+
+
+def _studies(sources: Sequence[str], out_dir: Path | None) -> list[Any]:
+    """The studies named (shipped names or files); by default every shipped one (with results)."""
+    from swarmtag.experiments import STUDIES, load_study  # noqa: PLC0415 - DuckDB is an extra
+
+    if sources:
+        return [load_study(source) for source in sources]
+    names = [name for name in STUDIES if out_dir is None or (out_dir / name).is_dir()]
+    if not names:
+        msg = f"{out_dir}: no results of a shipped study here; name the study with --study"
+        raise StudyError(msg)
+    return [load_study(name) for name in names]
+
+
+@study.command("report")
+@click.argument("out_dir", metavar="DIR", type=click.Path(file_okay=False, path_type=Path))
+@click.option(
+    "--study",
+    "sources",
+    multiple=True,
+    metavar="NAME|FILE",
+    help="Study to report, repeatable [default: every shipped study with results in DIR].",
+)
+@click.option(
+    "--resamples",
+    type=click.IntRange(min=1),
+    metavar="N",
+    help="Bootstrap resamples [default: the study's own; capped after a quick run].",
+)
+def report_cmd(*, out_dir: Path, sources: tuple[str, ...], resamples: int | None) -> None:
+    """Tables, figures and DIR/report.html from the results stored in DIR."""
+    from swarmtag.experiments.report import write_report  # noqa: PLC0415 - DuckDB is an extra
+
+    path = write_report(out_dir, _studies(sources, out_dir), resamples=resamples)
+    click.echo(f"report: {path}")
+
+
+@click.command("reproduce")
+@click.option(
+    "--quick", is_flag=True, help="Every study with its quick run count (about a minute)."
+)
+@click.option(
+    "--study",
+    "sources",
+    multiple=True,
+    metavar="NAME|FILE",
+    help="Study to run, repeatable [default: the five studies of SPEC §6].",
+)
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=Path("out/reproduction"),
+    show_default=True,
+    help="Results folder: store, metrics, tables, figures and report.html.",
+)
+@workers_option
+@scheduler_option
+@progress_option
+def reproduce(
+    *,
+    quick: bool,
+    sources: tuple[str, ...],
+    out_dir: Path,
+    workers: int | None,
+    scheduler: str | None,
+    progress: bool | None,
+) -> None:
+    """Run the published studies (resuming what is stored) and write the report."""
+    from swarmtag.experiments import run_study  # noqa: PLC0415 - DuckDB is an extra
+    from swarmtag.experiments.report import (  # noqa: PLC0415
+        StudyRecord,
+        write_report,
+        write_run_record,
+    )
+
+    studies = _studies(sources, None)
+    show = sys.stderr.isatty() if progress is None else progress
+    started = time.perf_counter()
+    for spec in studies:
+        begin = time.perf_counter()
+        result = run_study(
+            spec, out_dir=out_dir, quick=quick, workers=workers, scheduler=scheduler, progress=show
+        )
+        wall = time.perf_counter() - begin
+        record = StudyRecord(
+            wall_time_s=wall,
+            quick=quick,
+            computed_runs=result.computed_runs,
+            reused_runs=result.reused_runs,
+        )
+        write_run_record(out_dir, spec, record)
+        click.echo(
+            f"{spec.name}: {result.computed_runs} runs computed, {result.reused_runs} reused, "
+            f"{wall:.1f} s"
+        )
+    path = write_report(out_dir, studies)
+    click.echo(f"report: {path} ({time.perf_counter() - started:.1f} s in all)")

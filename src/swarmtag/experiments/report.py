@@ -1,0 +1,218 @@
+"""The reproduction report: every study's tables and figures from the results store, one HTML file.
+
+For each study and swarm size the runs stored in ``DIR/results.duckdb`` are
+summarised again (the same seed gives the same numbers), and written next to
+the study's metrics: ``tables.md`` and ``tables.tex`` (values with 95 % CIs,
+differences with CIs and both p-values) and ``figures/`` (PA curves and
+latency curves with bands, latency per urgency level, the parameter sweep
+where a study sweeps one policy). Studies with several swarm sizes also get
+the scalability table (relative changes signed so that positive is better)
+and one panel set per size. ``DIR/report.html`` collects everything with the
+study parameters, the code version and the wall time of the last run.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+from swarmtag import __version__
+from swarmtag._atomic import atomic_write_bytes
+from swarmtag.analysis import MetricsReport, summarize
+from swarmtag.analysis.html import Section, write_html
+from swarmtag.analysis.tables import (
+    html_tables,
+    latex_tables,
+    markdown_tables,
+    scalability_html,
+    scalability_table,
+)
+from swarmtag.errors import StudyError
+from swarmtag.experiments.runner import QUICK_RESAMPLES, STORE_NAME, study_key
+from swarmtag.experiments.spec import Study
+from swarmtag.experiments.store import ResultsStore
+from swarmtag.io import CarrierLog
+
+__all__ = ["REPORT_NAME", "RUN_RECORD", "StudyRecord", "write_report", "write_run_record"]
+
+REPORT_NAME: Final = "report.html"
+_SIGN_NOTE: Final = (
+    "Relative changes are signed so that positive is better (a latency reduction is positive)."
+)
+RUN_RECORD: Final = "run.json"
+"""Per-study file written after a run: wall time, quick or full, runs computed and reused."""
+
+
+@dataclass(frozen=True, slots=True)
+class StudyRecord:
+    """What the last ``reproduce`` of a study did (kept in ``DIR/<study>/run.json``)."""
+
+    wall_time_s: float
+    quick: bool
+    computed_runs: int
+    reused_runs: int
+
+
+def write_run_record(out_dir: str | os.PathLike[str], study: Study, record: StudyRecord) -> None:
+    """Keep ``record`` next to the study's results."""
+    data = {
+        "wall_time_s": record.wall_time_s,
+        "quick": record.quick,
+        "computed_runs": record.computed_runs,
+        "reused_runs": record.reused_runs,
+    }
+    path = Path(out_dir) / study.name / RUN_RECORD
+    atomic_write_bytes(path, (json.dumps(data, indent=2) + "\n").encode())
+
+
+def _read_record(out_dir: Path, study: Study) -> StudyRecord | None:
+    path = out_dir / study.name / RUN_RECORD
+    try:
+        data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+        return StudyRecord(
+            wall_time_s=float(data["wall_time_s"]),
+            quick=bool(data["quick"]),
+            computed_runs=int(data["computed_runs"]),
+            reused_runs=int(data["reused_runs"]),
+        )
+    except FileNotFoundError:
+        return None
+    except (ValueError, KeyError, TypeError) as error:
+        msg = f"{path}: not a study run record ({error})"
+        raise StudyError(msg) from None
+
+
+def _stored_runs(store: ResultsStore, study: Study) -> int:
+    """Runs 0..n-1 stored for every condition and scale: the report covers exactly those."""
+    counts = []
+    for scale in study.scales:
+        key = study_key(study, scale.key)
+        for condition in study.conditions:
+            stored = store.stored_runs(key, condition)
+            n = 0
+            while n in stored:
+                n += 1
+            counts.append(n)
+    runs = min(counts)
+    if runs == 0:
+        msg = (
+            f"study {study.name!r}: no complete runs in the store for this code version; "
+            f"run it first (swarmtag study run {study.name})"
+        )
+        raise StudyError(msg)
+    return runs
+
+
+def _scale_reports(
+    store: ResultsStore, study: Study, runs: int, resamples: int
+) -> dict[str, tuple[MetricsReport, CarrierLog]]:
+    reports = {}
+    for scale in study.scales:
+        log = store.load_log(study_key(study, scale.key), study.conditions, runs)
+        report = summarize(log, baseline=study.baseline, n_resamples=resamples, seed=study.seed)
+        reports[scale.key] = (report, log)
+    return reports
+
+
+def _facts(study: Study, runs: int, resamples: int, record: StudyRecord | None) -> dict[str, str]:
+    facts = {
+        "description": study.description or "-",
+        "conditions": ", ".join(study.conditions),
+        "baseline": study.baseline,
+        "runs per condition": str(runs),
+        "urgency model": study.urgency,
+        "swarm sizes": ", ".join(
+            f"{s.key}: {s.scenario.robots} robots / {s.scenario.carriers} carriers, "
+            f"{s.scenario.run_ticks} ticks, arena {s.scenario.area.size:g} m, "
+            f"R = {s.scenario.detection_radius:g} m"
+            for s in study.scales
+        ),
+        "master seed": str(study.seed),
+        "bootstrap": f"{resamples} resamples over runs",
+        "code version": ", ".join(sorted({s.code_version for s in study.scales})),
+    }
+    if record is not None:
+        facts["wall time of the last run"] = (
+            f"{record.wall_time_s:.1f} s ({'quick' if record.quick else 'full'}; "
+            f"{record.computed_runs} runs computed, {record.reused_runs} reused)"
+        )
+    return facts
+
+
+def _study_sections(out_dir: Path, study: Study, *, resamples: int | None) -> list[Section]:
+    from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
+
+    record = _read_record(out_dir, study)
+    with ResultsStore(out_dir / STORE_NAME, read_only=True) as store:
+        runs = _stored_runs(store, study)
+        if resamples is None:
+            quick = record is not None and record.quick
+            resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
+        reports = _scale_reports(store, study, runs, resamples)
+    sections = []
+    for index, (scale, (report, log)) in enumerate(reports.items()):
+        folder = out_dir / study.name / scale
+        (folder / "figures").mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(folder / "tables.md", markdown_tables(report).encode())
+        atomic_write_bytes(folder / "tables.tex", latex_tables(report).encode())
+        figures = write_figures(report, log, folder / "figures")
+        title = study.name if len(reports) == 1 else f"{study.name}, swarm {scale}"
+        sections.append(
+            Section(
+                title=title,
+                facts=_facts(study, runs, resamples, record) if index == 0 else {},
+                tables_html=[html_tables(report)],
+                figures=figures,
+            )
+        )
+    if len(reports) > 1:
+        sections.append(
+            _scalability_section(out_dir, study, {k: r for k, (r, _) in reports.items()})
+        )
+    return sections
+
+
+def _scalability_section(
+    out_dir: Path, study: Study, reports: Mapping[str, MetricsReport]
+) -> Section:
+    others = [c for c in study.conditions if c != study.baseline]
+    markdown = "\n".join(scalability_table(reports, condition=c) for c in others)
+    latex = "\n".join(scalability_table(reports, condition=c, markdown=False) for c in others)
+    atomic_write_bytes(out_dir / study.name / "scalability.md", markdown.encode())
+    atomic_write_bytes(out_dir / study.name / "scalability.tex", latex.encode())
+    return Section(
+        title=f"{study.name}: relative change vs {study.baseline} per swarm size",
+        paragraphs=[_SIGN_NOTE],
+        tables_html=[scalability_html(reports, condition=c) for c in others],
+    )
+
+
+def write_report(
+    out_dir: str | os.PathLike[str],
+    studies: Sequence[Study],
+    *,
+    resamples: int | None = None,
+) -> Path:
+    """Tables, figures and ``report.html`` for ``studies`` from the store in ``out_dir``.
+
+    ``resamples`` defaults to each study's own (capped for quick runs).
+    """
+    folder = Path(out_dir)
+    if not (folder / STORE_NAME).is_file():
+        msg = f"{folder}: no results store ({STORE_NAME}) here; run the studies first"
+        raise StudyError(msg)
+    sections = []
+    for study in studies:
+        sections += _study_sections(folder, study, resamples=resamples)
+    path = folder / REPORT_NAME
+    write_html(
+        path,
+        "swarmtag reproduction report",
+        sections,
+        facts={"swarmtag": __version__, "studies": ", ".join(s.name for s in studies)},
+    )
+    return path

@@ -1,0 +1,104 @@
+"""The reproduction report from the results store, and the reproduce / study report commands."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from swarmtag.cli import main
+from swarmtag.errors import StudyError
+from swarmtag.experiments import load_study, run_study
+from swarmtag.experiments.report import StudyRecord, write_report, write_run_record
+
+from .helpers import SMALL_TOML, write_study
+
+
+def _cli(capsys, *argv):
+    with pytest.raises(SystemExit) as exited:
+        main(list(argv))
+    out, err = capsys.readouterr()
+    return int(exited.value.code or 0), out, err
+
+
+def test_report_from_the_store_is_reproducible(tmp_path):
+    study = load_study(write_study(tmp_path))
+    out = tmp_path / "out"
+    result = run_study(study, out_dir=out, workers=1)
+    write_run_record(
+        out,
+        study,
+        StudyRecord(
+            wall_time_s=1.5, quick=False, computed_runs=result.computed_runs, reused_runs=0
+        ),
+    )
+    path = write_report(out, [study])
+    html = path.read_text(encoding="utf-8")
+    folder = out / study.name / "default"
+    tables = (folder / "tables.md").read_text()
+    # The report's numbers are those of run_study's metrics: same store, seed and resamples.
+    metrics = json.loads((folder / "metrics.json").read_text())
+    pa = next(c for c in metrics["conditions"] if c["condition"] == "urgency:alpha=0.7")["pa"]
+    assert f"{pa['value']:.4f}" in tables
+    assert html.count("<table>") == 2
+    assert html.count("data:image/png;base64,") == 3
+    assert "1.5 s (full; 12 runs computed, 0 reused)" in html
+    assert study.scales[0].code_version in html
+    assert sorted(p.name for p in (folder / "figures").iterdir()) == [
+        "latency_curves.png", "pa_curves.png", "urgency_latency.png",
+    ]  # fmt: skip
+    write_report(out, [study])  # again: the same tables
+    assert (folder / "tables.md").read_text() == tables
+
+
+def test_report_without_results_says_so(tmp_path):
+    study = load_study(write_study(tmp_path))
+    with pytest.raises(StudyError, match="no results store"):
+        write_report(tmp_path, [study])
+
+
+def test_scales_get_the_scalability_table(tmp_path):
+    scaled = SMALL_TOML.replace("[scenario]\nrobots = 3\ncarriers = 7\n", "")
+    scaled += '\n[scales."3x7"]\nrobots = 3\ncarriers = 7\n\n[scales."4x8"]\nrobots = 4\ncarriers = 8\nticks = 120\n'
+    study = load_study(write_study(tmp_path, scaled))
+    out = tmp_path / "out"
+    run_study(study, out_dir=out, workers=1)
+    html = write_report(out, [study]).read_text(encoding="utf-8")
+    assert "relative change vs proximity per swarm size" in html
+    rows = (out / study.name / "scalability.md").read_text().splitlines()
+    assert rows[0].startswith("| Swarm | Metric | Baseline | Condition | Change (+ is better) |")
+    assert len(rows) == 2 + 2 * 3  # two sizes, three metrics
+
+
+def test_reproduce_then_report_commands(tmp_path, capsys):
+    source = write_study(tmp_path)
+    out = tmp_path / "out"
+    code, text, _ = _cli(
+        capsys,
+        "reproduce",
+        "--quick",
+        "--study",
+        str(source),
+        "--out",
+        str(out),
+        "--workers",
+        "1",
+        "--no-progress",
+    )
+    assert code == 0
+    assert "small: 4 runs computed, 0 reused" in text
+    assert f"report: {out / 'report.html'}" in text
+    record = json.loads((out / "small" / "run.json").read_text())
+    assert record["quick"] is True
+    assert record["computed_runs"] == 4
+    code, text, _ = _cli(capsys, "study", "report", str(out), "--study", str(source))
+    assert code == 0
+    assert text.strip() == f"report: {out / 'report.html'}"
+
+
+def test_study_report_of_a_folder_without_results_is_one_line(tmp_path, capsys):
+    code, out, err = _cli(capsys, "study", "report", str(tmp_path))
+    assert code == 2
+    assert out == ""
+    assert err.count("\n") == 1
+    assert "no results of a shipped study here" in err
