@@ -49,6 +49,16 @@ def test_report_from_the_store_is_reproducible(tmp_path):
     ]  # fmt: skip
     write_report(out, [study])  # again: the same tables
     assert (folder / "tables.md").read_text() == tables
+    # The exported event log is the stored one and gives the same KPIs through the CLI path.
+    from swarmtag.analysis import summarize
+    from swarmtag.io import read_event_log
+
+    log = read_event_log(folder / "carriers.csv")
+    assert len(log) == 2 * 6 * 7
+    again = summarize(log, baseline=study.baseline, n_resamples=study.resamples, seed=study.seed)
+    assert again.to_json() == metrics
+    write_report(out, [study], export_format="parquet")
+    assert read_event_log(folder / "carriers.parquet") == log
 
 
 def test_report_without_results_says_so(tmp_path):

@@ -109,11 +109,22 @@ def _studies(sources: Sequence[str], out_dir: Path | None) -> list[Any]:
     metavar="N",
     help="Bootstrap resamples [default: the study's own; capped after a quick run].",
 )
-def report_cmd(*, out_dir: Path, sources: tuple[str, ...], resamples: int | None) -> None:
-    """Tables, figures and DIR/report.html from the results stored in DIR."""
+@click.option(
+    "--format",
+    "export_format",
+    type=click.Choice(["csv", "parquet"]),
+    default="csv",
+    show_default=True,
+    help="Format of the exported event logs (carriers.*, events.* per study and scale).",
+)
+def report_cmd(
+    *, out_dir: Path, sources: tuple[str, ...], resamples: int | None, export_format: str
+) -> None:
+    """Event logs, tables, figures and DIR/report.html from the results stored in DIR."""
     from swarmtag.experiments.report import write_report  # noqa: PLC0415 - DuckDB is an extra
 
-    path = write_report(out_dir, _studies(sources, out_dir), resamples=resamples)
+    studies = _studies(sources, out_dir)
+    path = write_report(out_dir, studies, resamples=resamples, export_format=export_format)
     click.echo(f"report: {path}")
 
 

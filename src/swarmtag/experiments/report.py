@@ -2,7 +2,8 @@
 
 For each study and swarm size the runs stored in ``DIR/results.duckdb`` are
 summarised again (the same seed gives the same numbers), and written next to
-the study's metrics: ``tables.md`` and ``tables.tex`` (values with 95 % CIs,
+the study's metrics: the event logs (``carriers.csv``, ``events.csv``, or
+Parquet), ``tables.md`` and ``tables.tex`` (values with 95 % CIs,
 differences with CIs and both p-values) and ``figures/`` (PA curves and
 latency curves with bands, latency per urgency level, the parameter sweep
 where a study sweeps one policy). Studies with several swarm sizes also get
@@ -143,7 +144,9 @@ def _facts(study: Study, runs: int, resamples: int, record: StudyRecord | None) 
     return facts
 
 
-def _study_sections(out_dir: Path, study: Study, *, resamples: int | None) -> list[Section]:
+def _study_sections(
+    out_dir: Path, study: Study, *, resamples: int | None, export_format: str
+) -> list[Section]:
     from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
 
     record = _read_record(out_dir, study)
@@ -153,6 +156,11 @@ def _study_sections(out_dir: Path, study: Study, *, resamples: int | None) -> li
             quick = record is not None and record.quick
             resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
         reports = _scale_reports(store, study, runs, resamples)
+        for part in study.scales:
+            target = out_dir / study.name / part.key
+            target.mkdir(parents=True, exist_ok=True)
+            key = study_key(study, part.key)
+            store.export(key, study.conditions, runs, target, fmt=export_format)
     sections = []
     for index, (scale, (report, log)) in enumerate(reports.items()):
         folder = out_dir / study.name / scale
@@ -196,10 +204,13 @@ def write_report(
     studies: Sequence[Study],
     *,
     resamples: int | None = None,
+    export_format: str = "csv",
 ) -> Path:
-    """Tables, figures and ``report.html`` for ``studies`` from the store in ``out_dir``.
+    """Event logs, tables, figures and ``report.html`` of ``studies`` from ``out_dir``'s store.
 
-    ``resamples`` defaults to each study's own (capped for quick runs).
+    ``resamples`` defaults to each study's own (capped for quick runs); the
+    event logs of every scale are exported as ``carriers.<fmt>`` and
+    ``events.<fmt>`` (``export_format``: ``csv`` or ``parquet``).
     """
     folder = Path(out_dir)
     if not (folder / STORE_NAME).is_file():
@@ -207,7 +218,7 @@ def write_report(
         raise StudyError(msg)
     sections = []
     for study in studies:
-        sections += _study_sections(folder, study, resamples=resamples)
+        sections += _study_sections(folder, study, resamples=resamples, export_format=export_format)
     path = folder / REPORT_NAME
     write_html(
         path,
