@@ -38,13 +38,13 @@ import hashlib
 import json
 import os
 import re
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
 from swarmtag import __version__
+from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError, PolicyError, StudyError
 from swarmtag.policy import Policy, parse_policy
 from swarmtag.sim import Scenario
@@ -334,17 +334,5 @@ def _scales(data: Mapping[str, Any], urgency: str, ticks: int) -> tuple[Scale, .
 
 def read_study_file(path: str | os.PathLike[str]) -> Study:
     """Read and validate a study TOML file; every refusal is a ``StudyError`` naming the file."""
-    name = os.fspath(path)
-    try:
-        with Path(path).open("rb") as handle:
-            data = tomllib.load(handle)
-    except FileNotFoundError:
-        msg = f"{name}: no such study file"
-        raise StudyError(msg) from None
-    except OSError as error:
-        msg = f"{name}: cannot read ({error.strerror})"
-        raise StudyError(msg) from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        msg = f"{name}: not valid TOML ({error})"
-        raise StudyError(msg) from None
+    data = read_toml(path, what="study file", error=StudyError)
     return Study.from_mapping(data, source=Path(path).name)

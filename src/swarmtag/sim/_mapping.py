@@ -12,12 +12,11 @@ Unknown keys are errors that name the key and list the known ones.
 from __future__ import annotations
 
 import os
-import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, fields
-from pathlib import Path
 from typing import Any, Final
 
+from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError
 from swarmtag.sim._fields import check_int
 from swarmtag.sim.groups import (
@@ -132,18 +131,7 @@ def scenario_fields(
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The table of a TOML file; unreadable files and syntax errors are ``ConfigError``."""
-    try:
-        with Path(path).open("rb") as handle:
-            return tomllib.load(handle)
-    except FileNotFoundError:
-        msg = f"{os.fspath(path)}: no such scenario file"
-        raise ConfigError(msg) from None
-    except OSError as error:
-        msg = f"{os.fspath(path)}: cannot read ({error.strerror})"
-        raise ConfigError(msg) from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        msg = f"{os.fspath(path)}: not valid TOML ({error})"
-        raise ConfigError(msg) from None
+    return read_toml(path, what="scenario file", error=ConfigError)
 
 
 def scenario_to_mapping(values: Mapping[str, Any]) -> dict[str, Any]:
