@@ -184,15 +184,8 @@ class ResultsStore:
         prefix = [key.study, key.scale, condition]
         carrier_rows = _positions(carriers.run)
         event_rows = _positions(events.run)
-        n = len(carriers)
         carrier_frame = {
-            "study": np.full(n, key.study),
-            "scale": np.full(n, key.scale),
-            "condition": carriers.condition,
-            "seed": np.full(n, key.seed, dtype=np.int64),
-            "run": carriers.run,
-            "code_version": np.full(n, key.code_version),
-            "row": carrier_rows,
+            **_key_frame(key, carriers, carrier_rows),
             "carrier": carriers.carrier,
             "urgency0": carriers.urgency0,
             "order_time": carriers.order_time,
@@ -200,15 +193,8 @@ class ResultsStore:
             "delivery_time": carriers.delivery_time,
             "robot": _nullable_ids(carriers.robot),
         }
-        m = len(events)
         event_frame = {
-            "study": np.full(m, key.study),
-            "scale": np.full(m, key.scale),
-            "condition": events.condition,
-            "seed": np.full(m, key.seed, dtype=np.int64),
-            "run": events.run,
-            "code_version": np.full(m, key.code_version),
-            "row": event_rows,
+            **_key_frame(key, events, event_rows),
             "time": events.time,
             "kind": events.kind,
             "carrier": _nullable_ids(events.carrier),
@@ -335,6 +321,22 @@ class ResultsStore:
         write_event_log(self.load_log(key, conditions, runs), carriers_path)
         write_event_table(self.load_events(key, conditions, runs), events_path)
         return carriers_path, events_path
+
+
+def _key_frame(
+    key: RunKey, table: CarrierLog | EventTable, rows: np.ndarray[Any, Any]
+) -> dict[str, Any]:
+    """The key columns of every stored row of ``table`` (carriers and events alike)."""
+    n = len(table)
+    return {
+        "study": np.full(n, key.study),
+        "scale": np.full(n, key.scale),
+        "condition": table.condition,
+        "seed": np.full(n, key.seed, dtype=np.int64),
+        "run": table.run,
+        "code_version": np.full(n, key.code_version),
+        "row": rows,
+    }
 
 
 def _positions(run: np.ndarray[Any, Any]) -> np.ndarray[Any, Any]:
