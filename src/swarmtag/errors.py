@@ -29,12 +29,14 @@ what to do instead.
     │   ├── InvariantError                  a world-state invariant failed (checking mode)
     │   └── DeterminismError                a run differed between two ways of computing it
     ├── StudyError (ValueError)             a study file or option is not allowed (names the key)
+    ├── CalibrationError (ValueError)       a calibration baseline, free parameter or option refused
     └── StoreError (RuntimeError)           the results store cannot be opened or is inconsistent
 """
 
 from __future__ import annotations
 
 __all__ = [
+    "CalibrationError",
     "ConfigError",
     "DeterminismError",
     "EventLogError",
@@ -173,6 +175,10 @@ class DeterminismError(SimulationError):
 
 class StudyError(SwarmtagError, ValueError):
     """A study file or study option is not allowed; the message names the file and the key."""
+
+
+class CalibrationError(SwarmtagError, ValueError):
+    """A calibration baseline, free parameter or option is refused; the message names it."""
 
 
 class StoreError(SwarmtagError, RuntimeError):

@@ -48,14 +48,47 @@ def test_interval_is_numpys_2_5_and_97_5_percentiles_without_undefined():
     assert (ci90.low, ci90.high) == tuple(np.percentile(values, [5, 95]))
 
 
+def _censored_by_run(runs: ConditionRuns) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per run: every carrier's latency or (run end - order time), and whether delivered."""
+    result = []
+    for run in range(runs.n_runs):
+        rows = runs.run_index == run
+        given = runs.run_end[rows][~np.isnan(runs.run_end[rows])]
+        times = np.concatenate([runs.pickup_time[rows], runs.delivery_time[rows]])
+        times = times[~np.isnan(times)]
+        end = given[0] if given.size else (times.max() if times.size else 0.0)
+        delivered = runs.delivered[rows]
+        ends = np.where(delivered, runs.delivery_time[rows], end)
+        result.append((ends - runs.order_time[rows], delivered))
+    return result
+
+
+def _scipy_km_p95(values: np.ndarray, observed: np.ndarray) -> float:
+    from scipy import stats
+
+    data = stats.CensoredData(uncensored=values[observed], right=values[~observed])
+    cdf = stats.ecdf(data).cdf
+    reached = np.flatnonzero(cdf.probabilities >= 0.95 - 1e-9)
+    return float(cdf.quantiles[reached[0]]) if reached.size else np.nan
+
+
 def _reference_replicates(runs: ConditionRuns, n_resamples: int, seed: int) -> dict[str, list]:
     """Slow and obvious: draw runs, concatenate them, compute each figure from scratch."""
     rng = condition_generator(seed, runs.condition)
     draws = rng.integers(0, runs.n_runs, size=(n_resamples, runs.n_runs))
     latency = runs.delivery_time - runs.order_time
     per_run = run_values(runs)
-    result: dict[str, list] = {metric: [] for metric in METRICS}
+    censored = _censored_by_run(runs)
+    result: dict[str, list] = {metric: [] for metric in (*METRICS, "pa_at_delivery")}
     for drawn in draws:
+        values = np.concatenate([censored[run][0] for run in drawn])
+        observed = np.concatenate([censored[run][1] for run in drawn])
+        result["p95_latency_censored"].append(np.percentile(values, 95))
+        result["mean_latency_censored"].append(np.mean(values))
+        result["km_p95_latency"].append(_scipy_km_p95(values, observed))
+        at_delivery = per_run.pa_at_delivery[drawn]
+        at_delivery = at_delivery[~np.isnan(at_delivery)]
+        result["pa_at_delivery"].append(np.mean(at_delivery) if at_delivery.size else np.nan)
         pooled = np.concatenate(
             [latency[(runs.run_index == run) & runs.delivered] for run in drawn]
         )
@@ -66,6 +99,8 @@ def _reference_replicates(runs: ConditionRuns, n_resamples: int, seed: int) -> d
         result["throughput"].append(np.mean(throughputs) if throughputs.size else np.nan)
         result["pa"].append(np.mean(per_run.pa[drawn]))
         result["deliveries_per_run"].append(np.mean(per_run.deliveries[drawn]))
+    if np.isnan(_scipy_km_p95(*_pooled(censored))):  # undefined for the condition: for all
+        result["km_p95_latency"] = [np.nan] * n_resamples
     return result
 
 
@@ -75,11 +110,21 @@ def test_bootstrap_values_equal_the_slow_reference(log, seed):
     runs = ConditionRuns.from_log(log, "c")
     statistics = condition_statistics(runs, n_resamples=60, seed=seed)
     reference = _reference_replicates(runs, 60, seed)
-    # P95 is exact to the bit; sums in another order may differ in the last bits.
-    np.testing.assert_array_equal(
-        statistics.p95_latency.bootstrap_distribution, reference["p95_latency"]
-    )
-    for metric in METRICS[1:]:
+    # Percentiles are exact to the bit; sums in another order may differ in the last bits.
+    for metric in ("p95_latency", "p95_latency_censored", "km_p95_latency"):
+        np.testing.assert_array_equal(
+            statistics.estimate(metric).bootstrap_distribution, reference[metric], err_msg=metric
+        )
+    if statistics.km_p95_latency.value is None:  # never reached: undefined in every resample
+        assert statistics.km_p95_latency.n_undefined == 60
+    else:
+        assert statistics.km_p95_latency.value == _scipy_km_p95(*_pooled(_censored_by_run(runs)))
+    others = [
+        m for m in METRICS if m not in ("p95_latency", "p95_latency_censored", "km_p95_latency")
+    ]
+    if statistics.pa_at_delivery is not None:
+        others.append("pa_at_delivery")
+    for metric in others:
         np.testing.assert_allclose(
             statistics.estimate(metric).bootstrap_distribution,
             reference[metric],
@@ -87,6 +132,10 @@ def test_bootstrap_values_equal_the_slow_reference(log, seed):
             atol=1e-12,
             err_msg=metric,
         )
+
+
+def _pooled(by_run: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    return np.concatenate([v for v, _ in by_run]), np.concatenate([o for _, o in by_run])
 
 
 def test_resamples_without_a_value_are_left_out():

@@ -41,7 +41,10 @@ def test_tables_as_html_match_the_report(tmp_path):
     assert "<th>urgency:alpha=3.0</th>" in tables
     assert "<td>PA (5-50 %)</td>" in tables
     scal = scalability_html({"3/7": report}, condition="urgency:alpha=3.0")
-    assert scal.count("<tr>") == 1 + 3
+    assert scal.count("<tr>") == 1 + 6  # header, six metrics
+    # Undelivered differs (2 vs 1): the note follows the table, the P95 row is flagged.
+    assert "<td>P95 latency (s) \N{DAGGER}</td>" in scal
+    assert scal.endswith("compare the censored rows.</p>")
     path = tmp_path / "r.html"
     write_html(path, "t", [Section("s", tables_html=[tables, scal])], facts={})
     text = path.read_text(encoding="utf-8")

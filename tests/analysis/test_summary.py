@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmtag.analysis import METRICS, choose_baseline, summarize
+from swarmtag.analysis import CENSORED_METRICS, CORE_METRICS, METRICS, choose_baseline, summarize
 from swarmtag.errors import StatisticsError
 from swarmtag.io import CarrierLog
 from tests.io.strategies import carrier_logs, log_from_rows, permuted
@@ -59,16 +59,23 @@ def test_json_has_exactly_the_contract_shape():
         "urgency:alpha=3.0",
     ]
     for entry in document["conditions"]:
+        # SPEC §8.2's keys in its order, then the extensions (no urgency_end: no PA at delivery).
         assert list(entry) == [
             "condition",
             "runs",
-            *METRICS,
+            *CORE_METRICS,
             "total_deliveries",
             "undelivered",
+            *CENSORED_METRICS,
+            "runs_without_run_end",
         ]
+        assert entry["runs_without_run_end"] == 6
         assert entry["runs"] == 6
         for metric in METRICS:
             assert list(entry[metric]) == ["value", "ci"]
+            if metric == "km_p95_latency" and entry[metric]["value"] is None:
+                assert entry[metric]["ci"] == [None, None]  # the KM curve stays below 0.95
+                continue
             assert isinstance(entry[metric]["value"], float)
             low, high = entry[metric]["ci"]
             assert low <= high
@@ -87,10 +94,18 @@ def test_json_has_exactly_the_contract_shape():
             "ci",
             "p_bootstrap",
             "p_mannwhitney",
+            "undelivered_differs",
         ]
         assert comparison["baseline"] == "proximity"
+        assert isinstance(comparison["undelivered_differs"], bool)
+        if comparison["metric"] == "km_p95_latency":
+            assert comparison["p_mannwhitney"] is None  # no per-run value
+            if comparison["diff"] is None:  # a KM curve stays below 0.95: nothing to compare
+                assert comparison["p_bootstrap"] is None
+                continue
+        else:
+            assert 0 <= comparison["p_mannwhitney"] <= 1
         assert 0 <= comparison["p_bootstrap"] <= 1
-        assert 0 <= comparison["p_mannwhitney"] <= 1
 
 
 def test_json_has_null_where_undefined():

@@ -45,20 +45,38 @@ def test_markdown_tables_hold_every_metric_and_comparison(report):
     value_table, diff_table, note = text.strip().split("\n\n")
     rows = value_table.splitlines()
     assert rows[0] == "| Metric | proximity | urgency:alpha=3.0 |"
-    assert len(rows) == 2 + 5 + 2  # header, rule, five metrics, totals, undelivered
+    # header, rule, five metrics, totals, undelivered, three censoring-aware latencies
+    assert len(rows) == 2 + 5 + 2 + 3
+    assert [row.split(" | ")[0] for row in rows[-3:]] == [
+        "| P95 latency, censored (s)",
+        "| Mean latency, censored (s)",
+        "| KM P95 latency (s)",
+    ]
     pa = report.condition("urgency:alpha=3.0").pa
     expected = format_interval(pa.value, pa.confidence_interval.low, pa.confidence_interval.high)
     assert "| PA (5-50 %) | " in value_table
     assert expected in value_table
-    assert len(diff_table.splitlines()) == 2 + 5
+    assert len(diff_table.splitlines()) == 2 + 8
     assert "urgency:alpha=3.0 | PA (5-50 %)" in diff_table
+    # Undelivered 1 vs 2: the delivered-only latency rows carry the flag, the censored ones not.
+    assert "urgency:alpha=3.0 | P95 latency (s) \N{DAGGER} |" in diff_table
+    assert "urgency:alpha=3.0 | Mean latency (s) \N{DAGGER} |" in diff_table
+    assert "urgency:alpha=3.0 | P95 latency, censored (s) |" in diff_table
     assert "undelivered: proximity 2, urgency:alpha=3.0 1" in note
+    assert note.splitlines()[-1] == (
+        "\N{DAGGER} urgency:alpha=3.0: undelivered differs from proximity (1 vs 2): "
+        "delivered-only latency is biased; compare the censored rows."
+    )
+    assert "Runs without run_end in the log (proximity 12, urgency:alpha=3.0 12)" in note
 
 
 def test_latex_tables_escape_and_balance(report):
     text = latex_tables(report)
     assert text.count(r"\begin{tabular}") == text.count(r"\end{tabular}") == 2
     assert r"PA (5-50 \%)" in text
+    assert r"P95 latency (s) \textsuperscript{\dag}" in text
+    # Table cells are escaped; the notes are comments, where UTF-8 text is harmless.
+    assert all("\N{DAGGER}" not in line for line in text.splitlines() if not line.startswith("%"))
     assert "5-50 %)" not in text.replace(r"\%", "")
     for line in text.splitlines():
         if line.endswith(r"\\"):
@@ -83,12 +101,16 @@ def test_relative_change_refuses_unknown_metrics():
 
 def test_scalability_table(report):
     text = scalability_table({"3/7": report}, condition="urgency:alpha=3.0")
-    rows = text.strip().splitlines()
-    assert len(rows) == 2 + 3
+    table, note = text.strip().split("\n\n")
+    rows = table.splitlines()
+    assert len(rows) == 2 + 6
+    assert note.startswith("\N{DAGGER} 3/7: undelivered differs (1 vs 2)")
+    assert rows[3].startswith("| 3/7 | Undelivered carriers | 2 | 1 | +50.0 % |")  # fewer: better
+    assert "| 3/7 | P95 latency (s) \N{DAGGER} |" in table
     base = report.condition("proximity").kpis
     other = report.condition("urgency:alpha=3.0").kpis
     expected = 100 * (base.p95_latency - other.p95_latency) / base.p95_latency
-    assert f"{expected:+.1f} %" in rows[3]
+    assert f"{expected:+.1f} %" in rows[4]
     assert rows[2].startswith(
         f"| 3/7 | Total deliveries | {base.total_deliveries} | {other.total_deliveries} |"
     )

@@ -216,3 +216,78 @@ def test_html_report_embeds_tables_and_figures(tmp_path, capsys):
     assert text.count("data:image/png;base64,") == 3
     assert "example_trial.csv" in text
     assert list(tmp_path.iterdir()) == [path]  # figures went to a temporary folder
+
+
+def test_censored_rows_and_the_undelivered_flag_in_the_text(example, capsys):
+    code, out, _ = run(["metrics", example, "--resamples", "300"], capsys)
+    assert code == 0
+    for label in ("P95 latency, censored (s)", "Mean latency, censored (s)", "KM P95 latency (s)"):
+        assert (
+            out.count(f"\N{BOX DRAWINGS LIGHT VERTICAL} {label}") == 2
+        )  # value and difference tables
+    assert "P95 latency (s) \N{DAGGER}" in out  # 1 vs 2 undelivered: delivered-only is biased
+    assert (
+        "\N{DAGGER} urgency:alpha=3.0: undelivered differs from proximity (1 vs 2): "
+        "delivered-only latency is biased; compare the censored rows." in out
+    )
+    assert "end at their latest pickup or delivery: a weaker lower bound" in out  # no run_end
+
+
+EVENTS_HEADER = "condition,seed,run,time,kind,carrier,robot,value"
+
+
+def _choice_files(folder: Path) -> tuple[Path, Path]:
+    log = folder / "carriers.csv"
+    log.write_text(
+        "condition,run,seed,carrier,urgency0,order_time,pickup_time,delivery_time,robot\n"
+        "proximity,0,0,1,5,0,2,4,0\nproximity,1,0,1,5,0,,,\n"
+        "urgency:alpha=0.7,0,0,1,5,0,2,4,1\n"
+    )
+    events = folder / "events.csv"
+    events.write_text(
+        f"{EVENTS_HEADER}\n"
+        "proximity,0,0,1,select,1,0,5\nproximity,0,0,1,candidates,1,0,2\n"
+        "proximity,0,0,1,select,1,1,5\nproximity,0,0,1,candidates,1,1,1\n"
+        "proximity,0,0,3,abandon,1,1,1\n"
+        "urgency:alpha=0.7,0,0,1,select,1,1,5\n"
+    )
+    return log, events
+
+
+def test_event_table_adds_the_choice_statistics(tmp_path, capsys):
+    from swarmtag.analysis import choice_statistics
+    from swarmtag.io import read_event_table
+
+    log, events = _choice_files(tmp_path)
+    argv = ["metrics", str(log), "--event-table", str(events), "--resamples", "100"]
+    code, out, _ = run([*argv, "--json", "--seed", "2"], capsys)
+    assert code == 0
+    document = json.loads(out)
+    assert list(document) == ["conditions", "comparisons", "choices"]
+    expected = choice_statistics(
+        read_event_table(events), log=read_event_log(log), n_resamples=100, seed=2
+    )
+    assert document["choices"] == [c.to_json() for c in expected]
+    proximity, urgency = document["choices"]
+    assert (proximity["runs"], proximity["selections"], proximity["double_pursuits"]) == (2, 2, 1)
+    assert proximity["share_1_candidate"] == 0.5
+    assert urgency["share_1_candidate"] is None  # no candidates events: unknown
+    code, out, _ = run([*argv, "--markdown", str(tmp_path / "t.md")], capsys)
+    assert code == 0
+    assert "Choice statistics by condition (event table)" in out
+    assert "Double pursuits per run [95 % CI]" in out
+    assert "unknown" in out
+    assert "| Share among 1 candidate | 0.5000 | unknown |" in (tmp_path / "t.md").read_text()
+    code, out, _ = run(["metrics", str(log), "--resamples", "100"], capsys)
+    assert "Choice statistics" not in out  # only with --event-table
+
+
+def test_event_table_of_other_runs_is_one_line(tmp_path, capsys):
+    log, events = _choice_files(tmp_path)
+    events.write_text(f"{EVENTS_HEADER}\nproximity,0,5,1,select,1,0,5\n")
+    code, out, err = run(["metrics", str(log), "--event-table", str(events)], capsys)
+    assert (code, out) == (2, "")
+    assert err == (
+        "swarmtag: error: event table row 1: run 5 of proximity is not in the event log; "
+        "are the two files from the same simulation?\n"
+    )

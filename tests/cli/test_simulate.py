@@ -8,10 +8,12 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from swarmtag.analysis import METRICS
 from swarmtag.cli import main
 from swarmtag.io import read_event_log
 
-SMALL = ["--ticks", "400", "--resamples", "200", "--no-progress"]
+SMALL = ["--profile", "base", "--ticks", "400", "--resamples", "200", "--no-progress"]
+"""The fast base world: these tests are about the command, not the model."""
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -32,18 +34,24 @@ def test_json_has_every_condition_and_comparison(capsys):
         "proximity", "urgency:alpha=9.0", "weighted:w=0.5",
     ]  # fmt: skip
     assert all(c["runs"] == 3 for c in data["conditions"])
-    metrics = {"p95_latency", "mean_latency", "throughput", "pa", "deliveries_per_run"}
+    # SPEC §8.2's five, the censoring-aware latencies, and PA at delivery (simulated logs
+    # carry each carrier's urgency at delivery or run end)
+    metrics = {*METRICS, "pa_at_delivery"}
     assert {(c["condition"], c["metric"]) for c in data["comparisons"]} == {
         (name, metric) for name in ("urgency:alpha=9.0", "weighted:w=0.5") for metric in metrics
     }
+    # The choice statistics of the simulated event table, one object per condition.
+    assert list(data) == ["conditions", "comparisons", "choices"]
+    assert [c["condition"] for c in data["choices"]] == [c["condition"] for c in data["conditions"]]
+    assert all(c["runs"] == 3 and c["selections"] > 0 for c in data["choices"])
 
 
 def test_table_output_names_the_scenario(capsys):
     code, out, _ = run(capsys, *SMALL, "--runs", "2", "--policy", "urgency", "--alpha", "3")
     assert code == 0
     assert (
-        "3 robots, 7 carriers, 400 ticks (growing urgency), detection radius 1 m, "
-        "2 runs from run 0, seed 0"
+        "3 robots, 7 carriers, 400 ticks of 0.1 s (growing urgency), disc perception, R = 1 m, "
+        "profile base, 2 runs from run 0, seed 0"
     ) in out
     assert "urgency:alpha=3.0" in out
     assert "PA (5-50 %)" in out
@@ -147,7 +155,7 @@ def test_config_file_and_flags(capsys, tmp_path):
     )  # fmt: skip
     assert code == 0
     assert "2 robots, 9 carriers" in out
-    assert "detection radius 2.5 m" in out
+    assert "R = 2.5 m" in out
 
 
 def test_trajectories_saved_for_replay_match_a_recorded_run(capsys, tmp_path):

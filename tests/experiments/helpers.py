@@ -15,6 +15,7 @@ SMALL: dict[str, Any] = {
     "ticks": 150,
     "chunk_runs": 2,
     "resamples": 50,
+    "profile": "base",  # the machinery is under test, not the model: the fast base world
     "scenario": {"robots": 3, "carriers": 7},
 }
 
@@ -26,6 +27,7 @@ quick_runs = 2
 ticks = 150
 chunk_runs = 2
 resamples = 50
+profile = "base"
 
 [scenario]
 robots = 3

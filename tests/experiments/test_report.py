@@ -40,7 +40,11 @@ def test_report_from_the_store_is_reproducible(tmp_path):
     metrics = json.loads((folder / "metrics.json").read_text())
     pa = next(c for c in metrics["conditions"] if c["condition"] == "urgency:alpha=0.7")["pa"]
     assert f"{pa['value']:.4f}" in tables
-    assert html.count("<table>") == 2
+    # Values, differences and the choice statistics of the stored event tables.
+    assert html.count("<table>") == 3
+    assert "| Choice statistic | proximity | urgency:alpha=0.7 |" in tables
+    assert "| P95 latency, censored (ticks) |" in tables
+    assert r"Choice statistic & proximity" in (folder / "tables.tex").read_text()
     assert html.count("data:image/png;base64,") == 3
     assert "1.5 s (full; 12 runs computed, 0 reused)" in html
     assert study.scales[0].code_version in html
@@ -75,9 +79,11 @@ def test_scales_get_the_scalability_table(tmp_path):
     run_study(study, out_dir=out, workers=1)
     html = write_report(out, [study]).read_text(encoding="utf-8")
     assert "relative change vs proximity per swarm size" in html
-    rows = (out / study.name / "scalability.md").read_text().splitlines()
+    table = (out / study.name / "scalability.md").read_text().split("\n\n")[0]
+    rows = table.splitlines()
     assert rows[0].startswith("| Swarm | Metric | Baseline | Condition | Change (+ is better) |")
-    assert len(rows) == 2 + 2 * 3  # two sizes, three metrics
+    assert len(rows) == 2 + 2 * 6  # two sizes, six metrics
+    assert "| 3x7 | P95 latency, censored (ticks) |" in table
 
 
 def test_reproduce_then_report_commands(tmp_path, capsys):

@@ -15,9 +15,17 @@ Row = tuple[str, int, int, int, float, float | None]
 
 
 def log_from_rows(
-    rows: Sequence[Row], *, time_unit: str | None = None, seed: int = 0
+    rows: Sequence[Row],
+    *,
+    time_unit: str | None = None,
+    seed: int = 0,
+    run_end: Sequence[float | None] | None = None,
+    urgency_end: Sequence[int | None] | None = None,
 ) -> CarrierLog:
-    """A log from short rows: pickup one time unit before delivery (not before 0), robot 0."""
+    """A log from short rows: pickup one time unit before delivery (not before 0), robot 0.
+
+    ``run_end`` and ``urgency_end``, if given, hold one value (or None) per row.
+    """
     delivery = [math.nan if row[5] is None else float(row[5]) for row in rows]
     return CarrierLog(
         condition=[row[0] for row in rows],
@@ -30,6 +38,8 @@ def log_from_rows(
         delivery_time=delivery,
         robot=[-1 if math.isnan(d) else 0 for d in delivery],
         time_unit=time_unit,
+        run_end=None if run_end is None else [math.nan if e is None else e for e in run_end],
+        urgency_end=None if urgency_end is None else [-1 if u is None else u for u in urgency_end],
     )
 
 
@@ -58,17 +68,37 @@ def carrier_logs(
     max_runs: int = 5,
     max_carriers: int = 9,
 ) -> CarrierLog:
-    """A valid per-carrier log: some conditions, runs with arbitrary ids, ties and undelivered."""
+    """A valid per-carrier log: some conditions, runs with arbitrary ids, ties and undelivered.
+
+    Some logs have ``run_end`` (for some runs or all, at or after the run's
+    last event) and ``urgency_end`` (for some rows or all).
+    """
     names = draw(st.lists(st.sampled_from(list(conditions)), min_size=1, unique=True))
+    with_run_end, with_urgency_end = draw(st.booleans()), draw(st.booleans())
     rows: list[Row] = []
+    ends: list[float | None] = []
+    urgencies: list[int | None] = []
     for name in names:
         run_ids = draw(st.lists(st.integers(0, 1000), min_size=1, max_size=max_runs, unique=True))
         for run in run_ids:
-            for carrier, urgency, order, delivery in draw(
-                runs_of_carriers(max_carriers=max_carriers)
-            ):
+            carriers = draw(runs_of_carriers(max_carriers=max_carriers))
+            latest = max((d for *_, d in carriers if d is not None), default=0.0)
+            end = float(latest + draw(st.integers(0, 6)))
+            given = with_run_end and draw(st.booleans() | st.just(True))
+            for carrier, urgency, order, delivery in carriers:
                 rows.append((name, run, carrier, urgency, order, delivery))
-    return log_from_rows(rows, time_unit=draw(st.sampled_from([None, "tick", "s"])))
+                ends.append(end if given else None)
+                urgencies.append(
+                    draw(st.integers(0, 9) | st.just(urgency) | st.none())
+                    if with_urgency_end
+                    else None
+                )
+    return log_from_rows(
+        rows,
+        time_unit=draw(st.sampled_from([None, "tick", "s"])),
+        run_end=ends if with_run_end else None,
+        urgency_end=urgencies if with_urgency_end else None,
+    )
 
 
 def permuted(log: CarrierLog, seed: int) -> CarrierLog:

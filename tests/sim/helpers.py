@@ -69,15 +69,17 @@ def run_script(params: Params, scene: Scene, ticks: int, **script: object) -> Si
     )
 
 
-def event_rows(result: SimResult) -> list[tuple[int, str, int, int]]:
-    """(time, kind, robot, carrier) of every event, in table order."""
+def event_rows(result: SimResult, *, candidates: bool = False) -> list[tuple[int, str, int, int]]:
+    """(time, kind, robot, carrier) of every event, in table order.
+
+    ``candidates`` events (one with every ``select``) are left out unless asked for.
+    """
     events = result.events
-    return list(
-        zip(
-            events.time.astype(int).tolist(),
-            events.kind.tolist(),
-            events.robot.tolist(),
-            events.carrier.tolist(),
-            strict=True,
-        )
+    rows = zip(
+        events.time.astype(int).tolist(),
+        events.kind.tolist(),
+        events.robot.tolist(),
+        events.carrier.tolist(),
+        strict=True,
     )
+    return [row for row in rows if candidates or row[1] != "candidates"]

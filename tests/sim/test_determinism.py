@@ -11,9 +11,12 @@ import pytest
 from swarmtag.errors import DeterminismError
 from swarmtag.policy import Proximity, Urgency
 from swarmtag.sim import (
+    Camera,
+    Motion,
     Realism,
     Reprioritisation,
     Scenario,
+    Walk,
     check_common_scenes,
     check_determinism,
     run_csv,
@@ -92,3 +95,19 @@ def test_the_check_reports_a_run_that_differs(monkeypatch):
     monkeypatch.setattr(checks, "simulate", flaky)
     with pytest.raises(DeterminismError, match="run 0 of seed 1 under proximity"):
         check_determinism(Scenario(ticks=200), Proximity(), seed=1, runs=2)
+
+
+SPLIT = Scenario(
+    ticks=400,
+    perception="split",
+    camera=Camera(range=1.5, occlusion="carriers+robots", memory=5.0),
+    walk=Walk(turn_interval=0.5, turn_angle=60.0),
+    motion=Motion(avoid_taken_faces=True),
+    realism=Realism(advertisement_loss=0.1, detection_noise=0.02),
+)
+
+
+def test_split_perception_and_a_turning_walk_are_deterministic_in_any_batch():
+    result = check_determinism(SPLIT, Urgency(alpha=3.0), seed=5, runs=4, run_offset=1)
+    assert result.events.kind.tolist().count("candidates") > 0
+    assert check_common_scenes(SPLIT, [Proximity(), Urgency(alpha=9.0)], seed=5, runs=3) is None

@@ -210,7 +210,8 @@ def test_timed_reprioritisation_changes_the_selection():
     result = run_script(params, _two_carrier_scene(), 6, walk=(-1.0, 0.0))
     assert event_rows(result) == [(2, "reprioritise", -1, 0), (5, "select", 0, 0)]
     events = result.events
-    assert events.value.tolist() == [9.0, 9.0]  # the new urgency, then the urgency heard
+    # the new urgency, the urgency heard, then the number of candidates chosen among
+    assert events.value.tolist() == [9.0, 9.0, 2.0]
     log = result.carriers
     assert log.urgency0.tolist() == [2, 8]  # the log keeps the urgency at run start
 

@@ -21,7 +21,7 @@ from swarmtag.sim import (
 
 
 def test_spec_defaults_for_three_robots_and_seven_carriers():
-    s = Scenario.default()
+    s = Scenario()
     assert (s.robots, s.carriers, s.ticks, s.tick) == (3, 7, 3000, 0.1)
     assert s.area.size == 3.75
     assert (s.bodies.robot_diameter, s.bodies.carrier_size) == (0.25, 0.355)
@@ -33,7 +33,7 @@ def test_spec_defaults_for_three_robots_and_seven_carriers():
 
 
 def test_kernel_units():
-    p = make_params(Scenario.default(), Proximity())
+    p = make_params(Scenario(), Proximity())
     assert p.step == 0.05
     assert (p.dock_ticks, p.lift_ticks, p.release_ticks) == (10, 10, 10)
     assert (p.timeout_ticks, p.cooldown_ticks) == (300, 300)
@@ -49,7 +49,7 @@ def test_kernel_units():
 
 @pytest.mark.parametrize(("carriers", "side"), [(7, 3.75), (28, 7.5), (3, 3.75)])
 def test_arena_scales_to_keep_carrier_density(carriers, side):
-    s = Scenario.default(robots=3, carriers=carriers)
+    s = Scenario(robots=3, carriers=carriers)
     assert s.area.size == pytest.approx(side)
     assert s.area.pickup_width / s.area.size == pytest.approx(1.5 / 3.75)
     assert s.area.dropoff_width / s.area.size == pytest.approx(0.75 / 3.75)
@@ -179,7 +179,7 @@ def test_toml_errors_name_the_file(tmp_path):
 
 
 def test_scenarios_are_frozen_and_hashable():
-    s = Scenario.default()
+    s = Scenario()
     with pytest.raises(AttributeError):
         s.robots = 4  # type: ignore[misc]
-    assert hash(s) == hash(Scenario.default())
+    assert hash(s) == hash(Scenario())

@@ -13,7 +13,7 @@ from swarmtag.sim.geometry import length
 
 @pytest.mark.parametrize(("robots", "carriers"), [(3, 7), (10, 20), (20, 40)])
 def test_scenes_respect_areas_and_spacing(robots, carriers):
-    params = make_params(Scenario.default(robots=robots, carriers=carriers), Proximity())
+    params = make_params(Scenario(robots=robots, carriers=carriers), Proximity())
     for run in range(10):
         scene = sample_scene(params, seed=0, run=run)
         half, r = params.carrier_half, params.robot_radius

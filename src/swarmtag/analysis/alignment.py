@@ -6,7 +6,9 @@ the k carriers most urgent at run start (ties: earlier order time, then
 smaller marker id); the first-k are the first k delivered (by delivery time,
 ties by marker id; fewer than k if fewer were delivered).
 ``PA(p) = |top-k ∩ first-k| / k``. PA (5-50 %) is the mean of PA(p) over
-p = 5, 10, ..., 50 in each run, then the mean over runs.
+p = 5, 10, ..., 50 in each run, then the mean over runs. PA at delivery, a
+comparison aid, is the same with the urgency when delivered (``urgency_end``)
+in place of the urgency at run start.
 """
 
 from __future__ import annotations
@@ -49,17 +51,21 @@ def alignment_k(p: int, n: ArrayLike) -> NDArray[np.int64]:
     return np.maximum(1, -((-int(p) * counts) // 100))
 
 
-def within_run_ranks(runs: ConditionRuns) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+def within_run_ranks(
+    runs: ConditionRuns, urgency: NDArray[np.int64] | None = None
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """Each carrier's 0-based rank in its run by urgency and by delivery.
 
-    Urgency rank: urgency at run start descending, then order time, then
-    marker id. Delivery rank: delivery time ascending, then marker id;
-    carriers never delivered rank after every delivered one.
+    Urgency rank: urgency (at run start unless ``urgency`` gives one per row)
+    descending, then order time, then marker id. Delivery rank: delivery time
+    ascending, then marker id; carriers never delivered rank after every
+    delivered one.
     """
     n_rows = len(runs.run_index)
     starts = runs.run_starts()[runs.run_index]
     positions = np.arange(n_rows, dtype=np.int64)
-    by_urgency = np.lexsort((runs.carrier, runs.order_time, -runs.urgency0, runs.run_index))
+    ranked = runs.urgency0 if urgency is None else urgency
+    by_urgency = np.lexsort((runs.carrier, runs.order_time, -ranked, runs.run_index))
     urgency_rank = np.empty(n_rows, dtype=np.int64)
     urgency_rank[by_urgency] = positions - starts[by_urgency]
     delivery = np.where(runs.delivered, runs.delivery_time, np.inf)
@@ -70,9 +76,15 @@ def within_run_ranks(runs: ConditionRuns) -> tuple[NDArray[np.int64], NDArray[np
 
 
 def priority_alignment(
-    runs: ConditionRuns, thresholds: Sequence[int] = PA_THRESHOLDS
+    runs: ConditionRuns,
+    thresholds: Sequence[int] = PA_THRESHOLDS,
+    *,
+    urgency: NDArray[np.int64] | None = None,
 ) -> NDArray[np.float64]:
     """PA(p) of every run (rows, in run-id order) at every threshold (columns).
+
+    ``urgency`` (one per carrier row) ranks in place of ``urgency0``: PA at
+    delivery passes ``runs.urgency_end``.
 
     >>> from swarmtag.io import CarrierLog
     >>> nan = float("nan")
@@ -83,7 +95,7 @@ def priority_alignment(
     >>> priority_alignment(ConditionRuns.from_log(log, "c"), [25, 50, 75, 100])
     array([[0.  , 0.5 , 1.  , 0.75]])
     """
-    urgency_rank, delivery_rank = within_run_ranks(runs)
+    urgency_rank, delivery_rank = within_run_ranks(runs, urgency)
     per_run = runs.carriers_per_run()
     delivered = runs.delivered
     result = np.empty((runs.n_runs, len(thresholds)), dtype=np.float64)

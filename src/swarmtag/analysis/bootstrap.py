@@ -7,9 +7,12 @@ percentile of the bootstrap values (numpy's default method) for a 95 % level.
 
 A figure can be undefined in a resample even when it is defined for the
 condition: latency when the resample holds only runs without deliveries,
-throughput when it holds only runs without one. Such resamples are left out
-of that figure's interval (``Estimate.n_undefined`` counts them); when no
-resample defines it, the interval is ``(None, None)``.
+throughput when it holds only runs without one, the Kaplan-Meier P95 when
+the resample's KM curve never reaches 0.95. Such resamples are left out of
+that figure's interval (``Estimate.n_undefined`` counts them); when no
+resample defines it, the interval is ``(None, None)``. The KM P95 of a
+condition whose own KM curve never reaches 0.95 is undefined outright: its
+bootstrap values are all undefined, so its interval and differences are too.
 """
 
 from __future__ import annotations
@@ -22,8 +25,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmtag.analysis._validation import check_options
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS
+from swarmtag.analysis.censoring import km_resampled_quantiles
 from swarmtag.analysis.curves import LATENCY_PERCENTILES, Curve, interval_percentiles
-from swarmtag.analysis.kpis import METRICS, ConditionKPIs, RunValues, condition_kpis, run_values
+from swarmtag.analysis.kpis import (
+    METRICS,
+    OPTIONAL_METRICS,
+    ConditionKPIs,
+    RunValues,
+    condition_kpis,
+    run_values,
+)
 from swarmtag.analysis.resampling import (
     CHUNK_ELEMENTS,
     condition_generator,
@@ -104,14 +115,25 @@ class ConditionStatistics:
     deliveries_per_run: Estimate
     pa_curve: Curve
     latency_curve: Curve
+    p95_latency_censored: Estimate
+    mean_latency_censored: Estimate
+    km_p95_latency: Estimate
+    pa_at_delivery: Estimate | None
+    """``None`` when the condition's log has no ``urgency_end``."""
+
+    @property
+    def metrics(self) -> tuple[str, ...]:
+        """The metrics this condition has: ``METRICS``, then PA at delivery where present."""
+        return METRICS + (OPTIONAL_METRICS if self.pa_at_delivery is not None else ())
 
     def estimate(self, metric: str) -> Estimate:
-        """The estimate of ``metric`` (one of ``METRICS``)."""
-        if metric not in METRICS:
+        """The estimate of ``metric`` (one of ``metrics``)."""
+        estimate: Estimate | None = getattr(self, metric) if metric in self.metrics else None
+        if estimate is None:
             raise StatisticsError(
-                f"unknown metric {metric!r}; expected one of {', '.join(METRICS)}"
+                f"unknown metric {metric!r} for {self.condition}; "
+                f"expected one of {', '.join(self.metrics)}"
             )
-        estimate: Estimate = getattr(self, metric)
         return estimate
 
 
@@ -130,10 +152,16 @@ def _replicates(
     curve_percentiles: Sequence[float],
     chunk_elements: int,
 ) -> tuple[dict[str, NDArray[np.float64]], NDArray[np.float64], NDArray[np.float64]]:
-    """Bootstrap values of every metric ``(B,)``, of the PA curve and of the latency curve."""
+    """Bootstrap values of every metric ``(B,)``, of the PA curve and of the latency curve.
+
+    Columns of the per-run sums: latency sum, deliveries, throughput and
+    whether defined, PA, censored latency sum, carriers, PA at delivery and
+    whether defined, then the PA curve.
+    """
     n_runs = values.n_runs
     throughput = values.throughput
     has_throughput = ~np.isnan(throughput)
+    has_pa_end = ~np.isnan(values.pa_at_delivery)
     per_run = np.column_stack(
         [
             values.latency_sum,
@@ -141,20 +169,26 @@ def _replicates(
             np.where(has_throughput, throughput, 0.0),
             has_throughput,
             values.pa,
+            values.censored_sum,
+            values.carriers,
+            np.where(has_pa_end, values.pa_at_delivery, 0.0),
+            has_pa_end,
             values.pa_curve(curve_thresholds),
         ]
     ).astype(np.float64)
     percentiles = [95, *curve_percentiles]
-    metrics = np.empty((n_resamples, len(METRICS)))
+    names = METRICS + OPTIONAL_METRICS
+    metrics = np.empty((n_resamples, len(names)))
     pa_curve = np.empty((n_resamples, len(curve_thresholds)))
     latency_curve = np.empty((n_resamples, len(curve_percentiles)))
     latencies = values.latencies
+    censored = values.censored
     rng = condition_generator(seed, values.condition)
     chunks = iter_multiplicities(
         rng,
         n_runs,
         n_resamples,
-        width=max(n_runs, latencies.values.size),
+        width=max(n_runs, latencies.values.size, censored.values.size),
         chunk_elements=chunk_elements,
     )
     start = 0
@@ -167,11 +201,17 @@ def _replicates(
         metrics[start:stop, 2] = _ratio(sums[:, 2], sums[:, 3])
         metrics[start:stop, 3] = sums[:, 4] / n_runs
         metrics[start:stop, 4] = sums[:, 1] / n_runs
-        pa_curve[start:stop] = sums[:, 5:] / n_runs
+        metrics[start:stop, 5] = resampled_percentiles(
+            censored.values, censored.runs, weights, [95]
+        )[:, 0]
+        metrics[start:stop, 6] = _ratio(sums[:, 5], sums[:, 6])
+        metrics[start:stop, 7] = km_resampled_quantiles(censored, weights, 95)
+        metrics[start:stop, 8] = _ratio(sums[:, 7], sums[:, 8])
+        pa_curve[start:stop] = sums[:, 9:] / n_runs
         latency_curve[start:stop] = pooled[:, 1:]
         start = stop
     by_metric = {}
-    for column, metric in enumerate(METRICS):
+    for column, metric in enumerate(names):
         replicate = np.ascontiguousarray(metrics[:, column])
         replicate.flags.writeable = False
         by_metric[metric] = replicate
@@ -221,6 +261,10 @@ def condition_statistics(
         curve_percentiles=curve_percentiles,
         chunk_elements=_chunk_elements,
     )
+    if kpis.km_p95_latency is None:  # the condition's own KM curve never reaches 0.95
+        undefined = np.full(n_resamples, np.nan)
+        undefined.flags.writeable = False
+        replicates["km_p95_latency"] = undefined
     estimates = {
         metric: Estimate(
             value=kpis.value(metric),
@@ -229,7 +273,7 @@ def condition_statistics(
             ),
             bootstrap_distribution=replicates[metric],
         )
-        for metric in METRICS
+        for metric in METRICS + OPTIONAL_METRICS
     }
     pooled = values.latencies.values
     latency_values = (
@@ -258,4 +302,8 @@ def condition_statistics(
         latency_curve=Curve.from_replicates(
             curve_percentiles, latency_values, latency_replicates, confidence_level
         ),
+        p95_latency_censored=estimates["p95_latency_censored"],
+        mean_latency_censored=estimates["mean_latency_censored"],
+        km_p95_latency=estimates["km_p95_latency"],
+        pa_at_delivery=estimates["pa_at_delivery"] if kpis.has_pa_at_delivery else None,
     )

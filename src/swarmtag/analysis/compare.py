@@ -7,7 +7,13 @@ independently. The two-sided bootstrap p-value is
 ``min(1, 2 * min(#(diff* <= 0), #(diff* >= 0)) / B)`` over the resamples in
 which both figures are defined. The second test is Mann-Whitney U (two-sided,
 scipy's defaults) on the per-run values; runs without a value are left out,
-and the p-value is ``None`` when either side has no value at all.
+and the p-value is ``None`` when either side has no value at all, and for the
+Kaplan-Meier P95 (which has no per-run value).
+
+Every comparison also says whether the two conditions left different shares
+of their carriers undelivered (``undelivered_differs``): then delivered-only
+latency compares different sets of carriers and is biased, and the censored
+companions are the ones to read.
 """
 
 from __future__ import annotations
@@ -23,10 +29,17 @@ from swarmtag.analysis.bootstrap import (
     ConfidenceInterval,
     percentile_interval,
 )
-from swarmtag.analysis.kpis import METRICS
+from swarmtag.analysis.kpis import ConditionKPIs
 from swarmtag.errors import StatisticsError
 
-__all__ = ["Comparison", "bootstrap_p_value", "compare", "compare_all", "mann_whitney_p"]
+__all__ = [
+    "Comparison",
+    "bootstrap_p_value",
+    "compare",
+    "compare_all",
+    "mann_whitney_p",
+    "undelivered_differs",
+]
 
 
 def bootstrap_p_value(differences: ArrayLike) -> float | None:
@@ -82,12 +95,24 @@ class Comparison:
     p_mannwhitney: float | None
     bootstrap_distribution: NDArray[np.float64]
     """Bootstrap values of the difference; NaN where either figure was undefined."""
+    undelivered: tuple[int, int]
+    """Undelivered carriers of the condition and of the baseline."""
+    undelivered_differs: bool
+    """Whether the two left different shares of their carriers undelivered."""
+
+
+def undelivered_differs(condition: ConditionKPIs, baseline: ConditionKPIs) -> bool:
+    """Whether the undelivered shares differ: ``u_c / n_c != u_b / n_b``, in exact integers.
+
+    With the same number of carriers on both sides, whether the counts differ.
+    """
+    return condition.undelivered * baseline.carriers != baseline.undelivered * condition.carriers
 
 
 def compare(
     condition: ConditionStatistics, baseline: ConditionStatistics, metric: str
 ) -> Comparison:
-    """Compare ``condition`` with ``baseline`` on ``metric`` (one of ``METRICS``)."""
+    """Compare ``condition`` with ``baseline`` on ``metric`` (one both of them have)."""
     if condition.n_resamples != baseline.n_resamples:
         raise StatisticsError(
             f"{condition.condition} has {condition.n_resamples} resamples but the baseline "
@@ -99,6 +124,10 @@ def compare(
     differences = mine.bootstrap_distribution - theirs.bootstrap_distribution
     differences.flags.writeable = False
     diff = None if mine.value is None or theirs.value is None else mine.value - theirs.value
+    mine_runs, theirs_runs = condition.values.per_run(metric), baseline.values.per_run(metric)
+    p_mannwhitney = (
+        None if mine_runs is None or theirs_runs is None else mann_whitney_p(mine_runs, theirs_runs)
+    )
     return Comparison(
         condition=condition.condition,
         baseline=baseline.condition,
@@ -108,15 +137,19 @@ def compare(
             differences, confidence_level=condition.confidence_level
         ),
         p_bootstrap=bootstrap_p_value(differences),
-        p_mannwhitney=mann_whitney_p(
-            condition.values.per_run(metric), baseline.values.per_run(metric)
-        ),
+        p_mannwhitney=p_mannwhitney,
         bootstrap_distribution=differences,
+        undelivered=(condition.kpis.undelivered, baseline.kpis.undelivered),
+        undelivered_differs=undelivered_differs(condition.kpis, baseline.kpis),
     )
 
 
 def compare_all(
     condition: ConditionStatistics, baseline: ConditionStatistics
 ) -> tuple[Comparison, ...]:
-    """``compare`` for every metric, in the order of ``METRICS``."""
-    return tuple(compare(condition, baseline, metric) for metric in METRICS)
+    """``compare`` for every metric both have, in the order of ``METRICS`` (then optional ones)."""
+    return tuple(
+        compare(condition, baseline, metric)
+        for metric in condition.metrics
+        if metric in baseline.metrics
+    )

@@ -2,10 +2,13 @@
 
 ``run_values`` computes, for every run of a condition at once, the numbers
 the bootstrap resamples and Mann-Whitney compares: deliveries, latency sum,
-mean and P95 latency, throughput, and PA at each threshold.
-``condition_kpis`` turns them into the condition's figures: pooled P95 and
-mean latency, mean throughput over the runs that have one, PA (5-50 %),
-deliveries per run, total deliveries and undelivered carriers.
+mean and P95 latency, throughput, PA at each threshold, their censoring-aware
+companions (``swarmtag.analysis.censoring``) and, where the log has
+``urgency_end``, PA at delivery. ``condition_kpis`` turns them into the
+condition's figures: pooled P95 and mean latency, mean throughput over the
+runs that have one, PA (5-50 %), deliveries per run, total deliveries,
+undelivered carriers, the censored P95 and mean, the Kaplan-Meier P95 and PA
+at delivery.
 """
 
 from __future__ import annotations
@@ -18,13 +21,30 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS, PA_THRESHOLDS, priority_alignment
+from swarmtag.analysis.censoring import CensoredLatencies, censored_latencies, km_quantile
 from swarmtag.analysis.latency import SortedLatencies, segment_percentile, sorted_latencies
 from swarmtag.analysis.runs import ConditionRuns
+from swarmtag.io.schema import MISSING_ID
 
-__all__ = ["METRICS", "ConditionKPIs", "RunValues", "condition_kpis", "run_values"]
+__all__ = [
+    "CENSORED_METRICS",
+    "CORE_METRICS",
+    "METRICS",
+    "OPTIONAL_METRICS",
+    "ConditionKPIs",
+    "RunValues",
+    "condition_kpis",
+    "run_values",
+]
 
-METRICS: Final = ("p95_latency", "mean_latency", "throughput", "pa", "deliveries_per_run")
-"""The compared metrics, in the order of SPEC §8.2."""
+CORE_METRICS: Final = ("p95_latency", "mean_latency", "throughput", "pa", "deliveries_per_run")
+"""The five metrics of SPEC §8.2's JSON, in its order."""
+CENSORED_METRICS: Final = ("p95_latency_censored", "mean_latency_censored", "km_p95_latency")
+"""The censoring-aware latency companions (SPEC §5), after the core metrics everywhere."""
+METRICS: Final = CORE_METRICS + CENSORED_METRICS
+"""The metrics every condition has and every comparison covers, in output order."""
+OPTIONAL_METRICS: Final = ("pa_at_delivery",)
+"""Metrics present only when the log has their column (``urgency_end``), after ``METRICS``."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,20 +69,37 @@ class RunValues:
     pa: NDArray[np.float64]
     """PA (5-50 %) of each run: the mean of PA(p) over p = 5, 10, ..., 50."""
     latencies: SortedLatencies
+    censored: CensoredLatencies
+    """Every carrier's latency, undelivered ones right-censored at run end."""
+    censored_sum: NDArray[np.float64]
+    mean_latency_censored: NDArray[np.float64]
+    p95_latency_censored: NDArray[np.float64]
+    has_urgency_end: bool
+    """Whether any row of the condition has ``urgency_end`` (PA at delivery is then reported)."""
+    pa_at_delivery: NDArray[np.float64]
+    """PA (5-50 %) ranking by ``urgency_end``; NaN for a run in which a row lacks it."""
 
     @property
     def n_runs(self) -> int:
         """Number of runs."""
         return len(self.run_ids)
 
-    def per_run(self, metric: str) -> NDArray[np.float64]:
-        """The per-run value Mann-Whitney compares for ``metric`` (one of ``METRICS``)."""
-        values: dict[str, NDArray[np.float64]] = {
+    def per_run(self, metric: str) -> NDArray[np.float64] | None:
+        """The per-run value Mann-Whitney compares for ``metric``; ``None`` for the KM P95.
+
+        ``metric`` is one of ``METRICS`` or ``OPTIONAL_METRICS``; the
+        Kaplan-Meier P95 has no per-run value and no Mann-Whitney test.
+        """
+        values: dict[str, NDArray[np.float64] | None] = {
             "p95_latency": self.p95_latency,
             "mean_latency": self.mean_latency,
             "throughput": self.throughput,
             "pa": self.pa,
             "deliveries_per_run": self.deliveries.astype(np.float64),
+            "p95_latency_censored": self.p95_latency_censored,
+            "mean_latency_censored": self.mean_latency_censored,
+            "km_p95_latency": None,
+            "pa_at_delivery": self.pa_at_delivery,
         }
         return values[metric]
 
@@ -110,6 +147,15 @@ def run_values(
     throughput = _throughput(runs, deliveries)
     pa = np.mean(pa_by_threshold[:, pa_columns], axis=1)
     carriers = runs.carriers_per_run()
+    censored = censored_latencies(runs)
+    censored_sum = np.bincount(
+        censored.runs, weights=censored.values, minlength=runs.n_runs
+    ).astype(np.float64)
+    mean_latency_censored = censored_sum / carriers  # every run has at least one carrier
+    p95_latency_censored = segment_percentile(
+        censored.by_run(), censored.run_starts, censored.per_run, 95
+    )
+    pa_at_delivery = _pa_at_delivery(runs)
     for array in (
         latency_sum,
         mean_latency,
@@ -118,6 +164,10 @@ def run_values(
         pa_by_threshold,
         pa,
         carriers,
+        censored_sum,
+        mean_latency_censored,
+        p95_latency_censored,
+        pa_at_delivery,
     ):
         array.flags.writeable = False
     return RunValues(
@@ -133,7 +183,24 @@ def run_values(
         pa_by_threshold=pa_by_threshold,
         pa=pa,
         latencies=latencies,
+        censored=censored,
+        censored_sum=censored_sum,
+        mean_latency_censored=mean_latency_censored,
+        p95_latency_censored=p95_latency_censored,
+        has_urgency_end=bool((runs.urgency_end != MISSING_ID).any()),
+        pa_at_delivery=pa_at_delivery,
     )
+
+
+def _pa_at_delivery(runs: ConditionRuns) -> NDArray[np.float64]:
+    """PA (5-50 %) per run ranking by ``urgency_end``; NaN where a row of the run lacks it."""
+    missing = np.bincount(
+        runs.run_index, weights=runs.urgency_end == MISSING_ID, minlength=runs.n_runs
+    )
+    if (missing > 0).all():
+        return np.full(runs.n_runs, np.nan)
+    by_threshold = priority_alignment(runs, PA_THRESHOLDS, urgency=runs.urgency_end)
+    return np.where(missing > 0, np.nan, np.mean(by_threshold, axis=1))
 
 
 @dataclass(frozen=True)
@@ -149,9 +216,22 @@ class ConditionKPIs:
     deliveries_per_run: float
     total_deliveries: int
     undelivered: int
+    p95_latency_censored: float
+    """Lower bound: undelivered carriers count at run end - order time."""
+    mean_latency_censored: float
+    """Lower bound, likewise."""
+    km_p95_latency: float | None
+    """Kaplan-Meier P95; ``None`` where the KM curve never reaches 0.95."""
+    pa_at_delivery: float | None
+    """PA ranking by ``urgency_end``: ``None`` without it (see ``has_pa_at_delivery``)."""
+    has_pa_at_delivery: bool
+    carriers: int
+    """Carriers in all runs, delivered or not."""
+    runs_without_run_end: int
+    """Runs whose end was taken from their latest pickup or delivery (no ``run_end``)."""
 
     def value(self, metric: str) -> float | None:
-        """The figure of ``metric`` (one of ``METRICS``)."""
+        """The figure of ``metric`` (one of ``METRICS`` or ``OPTIONAL_METRICS``)."""
         value: float | None = getattr(self, metric)
         return value
 
@@ -171,6 +251,8 @@ def condition_kpis(values: RunValues) -> ConditionKPIs:
     pooled = values.latencies.values
     with_throughput = values.throughput[~np.isnan(values.throughput)]
     total = int(values.deliveries.sum())
+    censored = values.censored.values
+    with_pa_at_delivery = values.pa_at_delivery[~np.isnan(values.pa_at_delivery)]
     return ConditionKPIs(
         condition=values.condition,
         runs=values.n_runs,
@@ -181,4 +263,11 @@ def condition_kpis(values: RunValues) -> ConditionKPIs:
         deliveries_per_run=total / values.n_runs,
         total_deliveries=total,
         undelivered=int(values.carriers.sum()) - total,
+        p95_latency_censored=float(np.percentile(censored, 95)),
+        mean_latency_censored=float(np.mean(censored)),
+        km_p95_latency=km_quantile(values.censored, 95),
+        pa_at_delivery=(float(np.mean(with_pa_at_delivery)) if with_pa_at_delivery.size else None),
+        has_pa_at_delivery=values.has_urgency_end,
+        carriers=int(values.carriers.sum()),
+        runs_without_run_end=int((~values.censored.run_end_recorded).sum()),
     )

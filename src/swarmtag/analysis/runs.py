@@ -50,6 +50,12 @@ class ConditionRuns:
     order_time: NDArray[np.float64]
     delivery_time: NDArray[np.float64]
     """NaN for carriers never delivered."""
+    pickup_time: NDArray[np.float64]
+    """NaN for carriers never picked up."""
+    run_end: NDArray[np.float64]
+    """The log's ``run_end`` of each row's run; NaN where the log has none."""
+    urgency_end: NDArray[np.int64]
+    """The log's ``urgency_end``; ``MISSING_ID`` (-1) where the log has none."""
 
     @classmethod
     def from_log(cls, log: CarrierLog, condition: str) -> ConditionRuns:
@@ -69,6 +75,9 @@ class ConditionRuns:
             urgency0=_frozen(log.urgency0[rows]),
             order_time=_frozen(log.order_time[rows]),
             delivery_time=_frozen(log.delivery_time[rows]),
+            pickup_time=_frozen(log.pickup_time[rows]),
+            run_end=_frozen(log.run_end[rows]),
+            urgency_end=_frozen(log.urgency_end[rows]),
         )
 
     @property

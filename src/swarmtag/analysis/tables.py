@@ -2,7 +2,10 @@
 
 One number format everywhere (terminal, Markdown, LaTeX): four significant
 digits, no exponent, ``n/a`` where a figure is undefined; bootstrap
-p-values of 0 are shown as ``< 2/B``. Pure: strings in, strings out.
+p-values of 0 are shown as ``< 2/B``. Every latency table carries the
+censoring-aware companions and the undelivered counts; a comparison whose
+undelivered shares differ gets ``FLAG`` on its delivered-only latency rows
+and one note line saying so. Pure: strings in, strings out.
 """
 
 from __future__ import annotations
@@ -12,12 +15,18 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Final
 
-from swarmtag.analysis.kpis import METRICS
+from swarmtag.analysis.compare import Comparison
+from swarmtag.analysis.kpis import CENSORED_METRICS, CORE_METRICS, OPTIONAL_METRICS
 from swarmtag.analysis.summary import MetricsReport
 from swarmtag.errors import StatisticsError
 
 __all__ = [
+    "DELIVERED_LATENCY_METRICS",
+    "FLAG",
     "SCALABILITY_METRICS",
+    "censoring_notes",
+    "flag_notes",
+    "flagged",
     "format_interval",
     "format_number",
     "format_p_value",
@@ -27,6 +36,7 @@ __all__ = [
     "metric_label",
     "relative_change",
     "scalability_html",
+    "scalability_notes",
     "scalability_table",
     "unit_word",
 ]
@@ -39,9 +49,26 @@ _LABELS: Final = {
     "pa": "PA (5-50 %)",
     "deliveries_per_run": "Deliveries per run",
     "total_deliveries": "Total deliveries",
+    "undelivered": "Undelivered carriers",
+    "p95_latency_censored": "P95 latency, censored ({unit})",
+    "mean_latency_censored": "Mean latency, censored ({unit})",
+    "km_p95_latency": "KM P95 latency ({unit})",
+    "pa_at_delivery": "PA at delivery (5-50 %)",
 }
-SCALABILITY_METRICS: Final = {"total_deliveries": 1, "p95_latency": -1, "pa": 1}
+SCALABILITY_METRICS: Final = {
+    "total_deliveries": 1,
+    "undelivered": -1,
+    "p95_latency": -1,
+    "p95_latency_censored": -1,
+    "km_p95_latency": -1,
+    "pa": 1,
+}
 """Metrics of the scalability table and the sign that makes a change "better" positive."""
+DELIVERED_LATENCY_METRICS: Final = ("p95_latency", "mean_latency")
+"""The latency rows biased when undelivered shares differ: they get ``FLAG``."""
+FLAG: Final = "\N{DAGGER}"
+"""Marks a delivered-only latency row whose two conditions left different shares undelivered."""
+_COUNTS: Final = ("total_deliveries", "undelivered")
 
 
 def unit_word(time_unit: str | None) -> str:
@@ -91,21 +118,27 @@ def format_p_value(p: float | None, resamples: int) -> str:
     return f"{p:.3g}"
 
 
+def flagged(comparison: Comparison) -> bool:
+    """Whether a comparison's row gets ``FLAG``: delivered-only latency, undelivered differs."""
+    return comparison.undelivered_differs and comparison.metric in DELIVERED_LATENCY_METRICS
+
+
+def _value_row(report: MetricsReport, metric: str) -> list[str]:
+    cells = [metric_label(metric, report.time_unit)]
+    for c in report.conditions:
+        if metric not in c.metrics:
+            cells.append("-")  # PA at delivery of a condition whose log lacks urgency_end
+            continue
+        estimate = c.estimate(metric)
+        interval = estimate.confidence_interval
+        cells.append(format_interval(estimate.value, interval.low, interval.high))
+    return cells
+
+
 def _rows(report: MetricsReport) -> tuple[list[str], list[list[str]], list[str], list[list[str]]]:
     """Header and cells of the value table and of the difference table."""
     names = [c.condition for c in report.conditions]
-    value_rows = [
-        [metric_label(metric, report.time_unit)]
-        + [
-            format_interval(
-                c.estimate(metric).value,
-                c.estimate(metric).confidence_interval.low,
-                c.estimate(metric).confidence_interval.high,
-            )
-            for c in report.conditions
-        ]
-        for metric in METRICS
-    ]
+    value_rows = [_value_row(report, metric) for metric in CORE_METRICS]
     value_rows.append(
         [metric_label("total_deliveries", report.time_unit)]
         + [str(c.kpis.total_deliveries) for c in report.conditions]
@@ -113,6 +146,12 @@ def _rows(report: MetricsReport) -> tuple[list[str], list[list[str]], list[str],
     value_rows.append(
         ["Undelivered carriers"] + [str(c.kpis.undelivered) for c in report.conditions]
     )
+    value_rows += [_value_row(report, metric) for metric in CENSORED_METRICS]
+    value_rows += [
+        _value_row(report, metric)
+        for metric in OPTIONAL_METRICS
+        if any(metric in c.metrics for c in report.conditions)
+    ]
     diff_header = [
         "Condition",
         "Metric",
@@ -123,7 +162,7 @@ def _rows(report: MetricsReport) -> tuple[list[str], list[list[str]], list[str],
     diff_rows = [
         [
             k.condition,
-            metric_label(k.metric, report.time_unit),
+            metric_label(k.metric, report.time_unit) + (f" {FLAG}" if flagged(k) else ""),
             format_interval(k.diff, k.confidence_interval.low, k.confidence_interval.high),
             format_p_value(k.p_bootstrap, report.n_resamples),
             format_p_value(k.p_mannwhitney, report.n_resamples),
@@ -139,6 +178,46 @@ def _markdown(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     return "\n".join(lines)
 
 
+def censoring_notes(report: MetricsReport) -> list[str]:
+    """What the censored rows mean, where run ends came from, and what PA at delivery is."""
+    notes = [
+        (
+            "Censored rows count each undelivered carrier at run end - order time, its least "
+            "possible latency: they are lower bounds. KM P95 is the 95th percentile of the "
+            "Kaplan-Meier latency distribution with undelivered carriers right-censored there "
+            "(n/a where the KM curve stays below 0.95)."
+        )
+    ]
+    without = [c for c in report.conditions if c.kpis.runs_without_run_end]
+    if without:
+        counts = ", ".join(f"{c.condition} {c.kpis.runs_without_run_end}" for c in without)
+        notes.append(
+            f"Runs without run_end in the log ({counts}) end at their latest pickup or "
+            "delivery: a weaker lower bound."
+        )
+    if any("pa_at_delivery" in c.metrics for c in report.conditions):
+        notes.append(
+            "PA at delivery ranks carriers by their urgency when delivered (undelivered: at "
+            "run end), a comparison aid; PA itself ranks by urgency at run start."
+        )
+    return notes
+
+
+def flag_notes(report: MetricsReport) -> list[str]:
+    """One line per condition flagged against the baseline (see ``flagged``)."""
+    notes = []
+    seen = set()
+    for k in report.comparisons:
+        if k.undelivered_differs and k.condition not in seen:
+            seen.add(k.condition)
+            notes.append(
+                f"{FLAG} {k.condition}: undelivered differs from {k.baseline} "
+                f"({k.undelivered[0]} vs {k.undelivered[1]}): delivered-only latency is biased; "
+                "compare the censored rows."
+            )
+    return notes
+
+
 def _note(report: MetricsReport) -> str:
     undelivered = ", ".join(f"{c.condition} {c.kpis.undelivered}" for c in report.conditions)
     return (
@@ -148,17 +227,28 @@ def _note(report: MetricsReport) -> str:
     )
 
 
+def _notes(report: MetricsReport) -> list[str]:
+    return [_note(report), *censoring_notes(report), *flag_notes(report)]
+
+
 def markdown_tables(report: MetricsReport) -> str:
-    """The value table and the difference table of a report, as Markdown."""
+    """The value table and the difference table of a report, as Markdown, then the notes."""
     header, values, diff_header, diffs = _rows(report)
     parts = [_markdown(header, values)]
     if diffs:
         parts.append(_markdown(diff_header, diffs))
-    parts.append(_note(report))
+    parts.append("\n".join(_notes(report)))
     return "\n\n".join(parts) + "\n"
 
 
-_LATEX_SPECIAL: Final = {"&": r"\&", "%": r"\%", "_": r"\_", "#": r"\#", "<": r"$<$"}
+_LATEX_SPECIAL: Final = {
+    "&": r"\&",
+    "%": r"\%",
+    "_": r"\_",
+    "#": r"\#",
+    "<": r"$<$",
+    FLAG: r"\textsuperscript{\dag}",
+}
 
 
 def _latex_escape(text: str) -> str:
@@ -184,7 +274,7 @@ def latex_tables(report: MetricsReport) -> str:
     parts = [_latex(header, values)]
     if diffs:
         parts.append(_latex(diff_header, diffs))
-    parts.append("% " + _note(report))
+    parts.append("\n".join("% " + note for note in _notes(report)))
     return "\n\n".join(parts) + "\n"
 
 
@@ -202,7 +292,7 @@ def html_tables(report: MetricsReport) -> str:
     parts = [_html(header, values)]
     if diffs:
         parts.append(_html(diff_header, diffs))
-    parts.append(f'<p class="note">{html.escape(_note(report))}</p>')
+    parts += [f'<p class="note">{html.escape(note)}</p>' for note in _notes(report)]
     return "\n".join(parts)
 
 
@@ -226,19 +316,29 @@ def relative_change(metric: str, baseline: float | None, value: float | None) ->
 _SCALABILITY_HEADER: Final = ("Swarm", "Metric", "Baseline", "Condition", "Change (+ is better)")
 
 
+def _differs(report: MetricsReport, condition: str) -> Comparison | None:
+    """A comparison of ``condition`` with the baseline, if their undelivered shares differ."""
+    return next(
+        (k for k in report.comparisons if k.condition == condition and k.undelivered_differs),
+        None,
+    )
+
+
 def _scalability_rows(reports: Mapping[str, MetricsReport], *, condition: str) -> list[list[str]]:
     rows = []
     for label, report in reports.items():
         base = report.condition(report.baseline).kpis
         other = report.condition(condition).kpis
+        mark = f" {FLAG}" if _differs(report, condition) else ""
         for metric in SCALABILITY_METRICS:
-            b = base.total_deliveries if metric == "total_deliveries" else base.value(metric)
-            v = other.total_deliveries if metric == "total_deliveries" else other.value(metric)
+            b = getattr(base, metric) if metric in _COUNTS else base.value(metric)
+            v = getattr(other, metric) if metric in _COUNTS else other.value(metric)
             change = relative_change(metric, b, v)
             rows.append(
                 [
                     label,
-                    metric_label(metric, report.time_unit),
+                    metric_label(metric, report.time_unit)
+                    + (mark if metric in DELIVERED_LATENCY_METRICS else ""),
                     format_number(b),
                     format_number(v),
                     "n/a" if change is None else f"{100 * change:+.1f} %",
@@ -252,13 +352,32 @@ def scalability_table(
 ) -> str:
     """Per swarm size: baseline and ``condition`` values and the signed relative change.
 
-    ``reports`` maps a size label (``"5/10"``) to that size's report.
+    ``reports`` maps a size label (``"5/10"``) to that size's report. The
+    notes (``scalability_notes``) follow the table.
     """
     rows = _scalability_rows(reports, condition=condition)
     header = _SCALABILITY_HEADER
-    return (_markdown(header, rows) if markdown else _latex(header, rows)) + "\n"
+    notes = scalability_notes(reports, condition=condition)
+    if markdown:
+        return "\n\n".join([_markdown(header, rows), *notes]) + "\n"
+    return "\n".join([_latex(header, rows), *("% " + note for note in notes)]) + "\n"
+
+
+def scalability_notes(reports: Mapping[str, MetricsReport], *, condition: str) -> list[str]:
+    """One line per swarm size whose undelivered counts differ (``FLAG`` rows of the table)."""
+    notes = []
+    for label, report in reports.items():
+        k = _differs(report, condition)
+        if k is not None:
+            notes.append(
+                f"{FLAG} {label}: undelivered differs ({k.undelivered[0]} vs "
+                f"{k.undelivered[1]}): delivered-only latency is biased; compare the censored rows."
+            )
+    return notes
 
 
 def scalability_html(reports: Mapping[str, MetricsReport], *, condition: str) -> str:
-    """The scalability table as an HTML ``<table>``."""
-    return _html(_SCALABILITY_HEADER, _scalability_rows(reports, condition=condition))
+    """The scalability table as an HTML ``<table>``, then its notes."""
+    table = _html(_SCALABILITY_HEADER, _scalability_rows(reports, condition=condition))
+    notes = scalability_notes(reports, condition=condition)
+    return "\n".join([table, *(f'<p class="note">{html.escape(n)}</p>' for n in notes)])

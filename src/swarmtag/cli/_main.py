@@ -8,8 +8,10 @@ from collections.abc import Sequence
 import click
 
 from swarmtag import __version__
+from swarmtag.cli.calibrate import calibrate_cmd
 from swarmtag.cli.demo import demo
 from swarmtag.cli.metrics import metrics
+from swarmtag.cli.profiles import profiles_cmd
 from swarmtag.cli.simulate import simulate_cmd
 from swarmtag.cli.study import reproduce, study
 from swarmtag.cli.tag import tag
@@ -35,6 +37,8 @@ app.add_command(metrics)
 app.add_command(simulate_cmd)
 app.add_command(study)
 app.add_command(reproduce)
+app.add_command(profiles_cmd)
+app.add_command(calibrate_cmd)
 
 
 def _one_line(text: str) -> str:

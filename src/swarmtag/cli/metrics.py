@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 
 import click
@@ -12,9 +13,27 @@ from rich.table import Table
 
 from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
-from swarmtag.analysis import METRICS, MetricsReport, summarize
+from swarmtag.analysis import (
+    CENSORED_METRICS,
+    CORE_METRICS,
+    OPTIONAL_METRICS,
+    MetricsReport,
+    summarize,
+)
+from swarmtag.analysis.choice_tables import (
+    choice_notes,
+    choice_rows,
+    choices_html,
+    choices_latex,
+    choices_markdown,
+)
+from swarmtag.analysis.choices import ConditionChoices, choice_statistics
 from swarmtag.analysis.html import Section, write_html
 from swarmtag.analysis.tables import (
+    FLAG,
+    censoring_notes,
+    flag_notes,
+    flagged,
     format_interval,
     format_p_value,
     html_tables,
@@ -26,9 +45,9 @@ from swarmtag.analysis.tables import (
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, resamples_option
 from swarmtag.errors import ConfigError
-from swarmtag.io import CarrierLog, read_event_log
+from swarmtag.io import CarrierLog, read_event_log, read_event_table
 
-__all__ = ["metrics"]
+__all__ = ["metrics", "render_choices", "render_report"]
 
 
 def _time_note(time_unit: str | None) -> str:
@@ -42,22 +61,33 @@ def _time_note(time_unit: str | None) -> str:
     )
 
 
+def _metric_cells(report: MetricsReport, metric: str) -> list[str]:
+    cells = []
+    for statistics in report.conditions:
+        if metric not in statistics.metrics:
+            cells.append("-")  # PA at delivery of a condition whose log lacks urgency_end
+            continue
+        estimate = statistics.estimate(metric)
+        interval = estimate.confidence_interval
+        cells.append(format_interval(estimate.value, interval.low, interval.high))
+    return cells
+
+
 def render_report(report: MetricsReport, console: Console) -> None:
+    """The KPI table, the difference table and the notes of a report, on ``console``."""
     level = f"{report.confidence_level * 100:g} %"
     kpis = Table(title=f"Metrics by condition: value [{level} CI]", title_justify="left")
     kpis.add_column("Metric")
     for statistics in report.conditions:
         kpis.add_column(statistics.condition, justify="right")
     kpis.add_row("Runs", *(str(s.kpis.runs) for s in report.conditions))
-    for metric in METRICS:
-        cells = []
-        for statistics in report.conditions:
-            estimate = statistics.estimate(metric)
-            interval = estimate.confidence_interval
-            cells.append(format_interval(estimate.value, interval.low, interval.high))
-        kpis.add_row(metric_label(metric, report.time_unit), *cells)
+    for metric in CORE_METRICS:
+        kpis.add_row(metric_label(metric, report.time_unit), *_metric_cells(report, metric))
     kpis.add_row("Total deliveries", *(str(s.kpis.total_deliveries) for s in report.conditions))
     kpis.add_row("Undelivered carriers", *(str(s.kpis.undelivered) for s in report.conditions))
+    optional = [m for m in OPTIONAL_METRICS if any(m in s.metrics for s in report.conditions)]
+    for metric in (*CENSORED_METRICS, *optional):
+        kpis.add_row(metric_label(metric, report.time_unit), *_metric_cells(report, metric))
     console.print(kpis)
 
     if report.comparisons:
@@ -78,7 +108,8 @@ def render_report(report: MetricsReport, console: Console) -> None:
             interval = comparison.confidence_interval
             diffs.add_row(
                 comparison.condition,
-                metric_label(comparison.metric, report.time_unit),
+                metric_label(comparison.metric, report.time_unit)
+                + (f" {FLAG}" if flagged(comparison) else ""),
                 format_interval(comparison.diff, interval.low, interval.high),
                 format_p_value(comparison.p_bootstrap, report.n_resamples),
                 format_p_value(comparison.p_mannwhitney, report.n_resamples),
@@ -93,9 +124,11 @@ def render_report(report: MetricsReport, console: Console) -> None:
         f"undelivered: {undelivered}.",
         highlight=False,
     )
+    for note in (*censoring_notes(report), *flag_notes(report)):
+        console.print(note, highlight=False)
     console.print(_time_note(report.time_unit), highlight=False)
     for statistics in report.conditions:
-        for metric in METRICS:
+        for metric in statistics.metrics:
             estimate = statistics.estimate(metric)
             missing = estimate.n_undefined
             if missing and estimate.value is not None:  # undefined outright shows as n/a
@@ -108,12 +141,32 @@ def render_report(report: MetricsReport, console: Console) -> None:
     console.print(
         f"CIs: bootstrap over whole runs, {report.n_resamples} resamples, seed {report.seed}; "
         "p (bootstrap) = min(1, 2 min(#diff*<=0, #diff*>=0) / B); "
-        "Mann-Whitney U two-sided on per-run values.",
+        "Mann-Whitney U two-sided on per-run values (KM P95 has none).",
         highlight=False,
     )
 
 
-def _write_html(path: Path, events: Path, report: MetricsReport, log: CarrierLog) -> None:
+def render_choices(choices: Sequence[ConditionChoices], console: Console) -> None:
+    """The choice statistics (selections, candidates, double pursuits, ...) on ``console``."""
+    header, rows = choice_rows(choices)
+    table = Table(title="Choice statistics by condition (event table)", title_justify="left")
+    table.add_column(header[0])
+    for name in header[1:]:
+        table.add_column(name, justify="right")
+    for row in rows:
+        table.add_row(*row)
+    console.print(table)
+    for note in choice_notes(choices):
+        console.print(note, highlight=False)
+
+
+def _write_html(
+    path: Path,
+    events: Path,
+    report: MetricsReport,
+    log: CarrierLog,
+    choices: Sequence[ConditionChoices] | None,
+) -> None:
     """One-section HTML report of an event log: tables and embedded figures."""
     from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
 
@@ -127,7 +180,7 @@ def _write_html(path: Path, events: Path, report: MetricsReport, log: CarrierLog
                 "time unit": unit_word(report.time_unit),
                 "bootstrap": f"{report.n_resamples} resamples over runs, seed {report.seed}",
             },
-            tables_html=[html_tables(report)],
+            tables_html=[html_tables(report)] + ([choices_html(choices)] if choices else []),
             figures=write_figures(report, log, folder),
         )
         write_html(
@@ -154,6 +207,14 @@ def _write_html(path: Path, events: Path, report: MetricsReport, log: CarrierLog
     "--json", "as_json", is_flag=True, help="Print one JSON object (SPEC §8.2) instead of tables."
 )
 @click.option(
+    "--event-table",
+    type=click.Path(path_type=Path),
+    metavar="FILE",
+    help="The long-format event table of the same runs (.csv or .parquet): adds the choice "
+    "statistics (selections, candidates, double pursuits, timeouts, abandons), under --json "
+    'as the key "choices".',
+)
+@click.option(
     "--markdown", type=click.Path(path_type=Path), help="Also write the tables as Markdown."
 )
 @click.option("--latex", type=click.Path(path_type=Path), help="Also write the tables as LaTeX.")
@@ -176,6 +237,7 @@ def metrics(
     resamples: int,
     seed: int,
     as_json: bool,
+    event_table: Path | None,
     markdown: Path | None,
     latex: Path | None,
     html_out: Path | None,
@@ -185,20 +247,33 @@ def metrics(
 
     For every condition: P95 and mean latency (delivered carriers, pooled over
     runs), throughput, priority alignment PA (5-50 %), deliveries per run, total
-    deliveries and undelivered carriers. Each other condition is compared with
-    the baseline: difference with CI, bootstrap p-value and Mann-Whitney U.
+    deliveries and undelivered carriers, and the censoring-aware latencies
+    (undelivered carriers counted at run end - order time: lower bounds; the
+    Kaplan-Meier P95). Each other condition is compared with the baseline:
+    difference with CI, bootstrap p-value and Mann-Whitney U.
     """
     for option, path in (("--markdown", markdown), ("--latex", latex), ("--html", html_out)):
         if path is not None and not path.parent.is_dir():
             raise ConfigError(f"{option}: folder {str(path.parent)!r} does not exist")
     log = read_event_log(events)
     report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
+    choices = None
+    if event_table is not None:
+        choices = choice_statistics(
+            read_event_table(event_table),
+            log=log,
+            conditions=[c.condition for c in report.conditions],
+            n_resamples=resamples,
+            seed=seed,
+        )
     written = []
     if markdown is not None:
-        atomic_write_bytes(markdown, markdown_tables(report).encode())
+        text = markdown_tables(report) + ("\n" + choices_markdown(choices) if choices else "")
+        atomic_write_bytes(markdown, text.encode())
         written.append(f"Markdown tables: {markdown}")
     if latex is not None:
-        atomic_write_bytes(latex, latex_tables(report).encode())
+        text = latex_tables(report) + ("\n" + choices_latex(choices) if choices else "")
+        atomic_write_bytes(latex, text.encode())
         written.append(f"LaTeX tables: {latex}")
     if figures is not None:
         from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
@@ -206,14 +281,19 @@ def metrics(
         figures.mkdir(parents=True, exist_ok=True)
         written += [f"figure: {path}" for path in write_figures(report, log, figures)]
     if html_out is not None:
-        _write_html(html_out, events, report, log)
+        _write_html(html_out, events, report, log, choices)
         written.append(f"HTML report: {html_out}")
     if as_json:
-        click.echo(json.dumps(report.to_json(), allow_nan=False))
+        document = report.to_json()
+        if choices is not None:
+            document["choices"] = [c.to_json() for c in choices]
+        click.echo(json.dumps(document, allow_nan=False))
         for line in written:
             click.echo(f"wrote {line}", err=True)
         return
     console = make_console()
     render_report(report, console)
+    if choices is not None:
+        render_choices(choices, console)
     for line in written:
         console.print(f"wrote {line}", highlight=False)

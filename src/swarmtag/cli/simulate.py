@@ -7,15 +7,16 @@ import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, Final
+from typing import Final
 
 import click
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from swarmtag.analysis import summarize
+from swarmtag.analysis import choice_statistics, summarize
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, resamples_option
-from swarmtag.cli.metrics import render_report
+from swarmtag.cli._scenario import build_scenario, scenario_options
+from swarmtag.cli.metrics import render_choices, render_report
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 from swarmtag.policy import Policy, Proximity, Urgency, Weighted, parse_policy
@@ -59,19 +60,6 @@ def _policies(
     if repeated:
         raise click.UsageError(f"condition given twice: {', '.join(repeated)}")
     return chosen
-
-
-def _scenario(
-    config: Path | None,
-    flags: dict[str, int | float | None],
-    urgency_model: str | None,
-) -> Scenario:
-    overrides: dict[str, Any] = {key: value for key, value in flags.items() if value is not None}
-    if urgency_model is not None:
-        overrides["urgency.model"] = urgency_model
-    if config is not None:
-        return Scenario.from_toml(config, overrides)
-    return Scenario.from_mapping({}, overrides)
 
 
 def _per_condition(path: Path, policy: Policy, several: bool) -> Path:
@@ -194,24 +182,7 @@ def _draw(
 @click.option(
     "--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Master seed."
 )
-@click.option("--robots", type=click.IntRange(min=1), help="Robots per run [default: 3].")
-@click.option("--carriers", type=click.IntRange(min=1), help="Carriers per run [default: 7].")
-@click.option("--ticks", type=click.IntRange(min=1), help="Run length T in ticks [default: 3000].")
-@click.option(
-    "--detection-radius",
-    type=click.FloatRange(min=0, min_open=True),
-    help="Detection radius R in metres [default: 1.0]; the decisive parameter, see the docs.",
-)
-@click.option(
-    "--urgency-model",
-    type=click.Choice(["growing", "static"]),
-    help="How urgencies arise [default: growing].",
-)
-@click.option(
-    "--config",
-    type=click.Path(exists=True, dir_okay=False, path_type=Path),
-    help="Scenario TOML file; the flags above override it.",
-)
+@scenario_options
 @click.option(
     "--events", type=click.Path(path_type=Path), help="Write the event log (.csv or .parquet)."
 )
@@ -255,12 +226,9 @@ def simulate_cmd(
     runs: int,
     run_offset: int,
     seed: int,
-    robots: int | None,
-    carriers: int | None,
-    ticks: int | None,
-    detection_radius: float | None,
-    urgency_model: str | None,
+    profile: str,
     config: Path | None,
+    settings: tuple[str, ...],
     events: Path | None,
     event_table: Path | None,
     snapshot: Path | None,
@@ -271,6 +239,7 @@ def simulate_cmd(
     resamples: int,
     as_json: bool,
     progress: bool | None,
+    **flags: object,
 ) -> None:
     """Simulate conditions on a scenario and print their KPIs with 95 % CIs.
 
@@ -279,13 +248,7 @@ def simulate_cmd(
     or inside a batch.
     """
     policies = _policies(conditions, policy, alpha, w)
-    flags = {
-        "robots": robots,
-        "carriers": carriers,
-        "ticks": ticks,
-        "detection_radius": detection_radius,
-    }
-    scenario = _scenario(config, flags, urgency_model)
+    scenario = build_scenario(profile=profile, config=config, flags=flags, settings=settings)
     _check_outputs(
         [
             ("--events", events, (".csv", ".parquet")),
@@ -301,6 +264,13 @@ def simulate_cmd(
         scenario, policies, seed=seed, runs=runs, run_offset=run_offset, progress=show
     )
     report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
+    choices = choice_statistics(
+        table,
+        log=log,
+        conditions=[c.condition for c in report.conditions],
+        n_resamples=resamples,
+        seed=seed,
+    )
     notes = []
     if events is not None:
         write_event_log(log, events)
@@ -319,16 +289,18 @@ def simulate_cmd(
             trajectories_path=trajectories_out,
         )
     if as_json:
-        click.echo(json.dumps(report.to_json(), allow_nan=False))
+        document = {**report.to_json(), "choices": [c.to_json() for c in choices]}
+        click.echo(json.dumps(document, allow_nan=False))
         for note in notes:
             click.echo(f"wrote {note}", err=True)
         return
     console.print(
         f"{scenario.robots} robots, {scenario.carriers} carriers, "
-        f"{scenario.run_ticks} ticks ({scenario.urgency.model} urgency), "
-        f"detection radius {scenario.detection_radius:g} m, {runs} runs "
+        f"{scenario.run_ticks} ticks of {scenario.tick:g} s ({scenario.urgency.model} urgency), "
+        f"{scenario.perception_summary()}, profile {profile}, {runs} runs "
         f"from run {run_offset}, seed {seed}\n"
     )
     render_report(report, console)
+    render_choices(choices, console)
     for note in notes:
         console.print(f"wrote {note}")

@@ -4,7 +4,8 @@ For each study and swarm size the runs stored in ``DIR/results.duckdb`` are
 summarised again (the same seed gives the same numbers), and written next to
 the study's metrics: the event logs (``carriers.csv``, ``events.csv``, or
 Parquet), ``tables.md`` and ``tables.tex`` (values with 95 % CIs,
-differences with CIs and both p-values) and ``figures/`` (PA curves and
+differences with CIs and both p-values, the censoring-aware latencies, the
+choice statistics from the stored event tables) and ``figures/`` (PA curves and
 latency curves with bands, latency per urgency level, the parameter sweep
 where a study sweeps one policy). Studies with several swarm sizes also get
 the scalability table (relative changes signed so that positive is better)
@@ -23,7 +24,8 @@ from typing import Any, Final
 
 from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
-from swarmtag.analysis import MetricsReport, summarize
+from swarmtag.analysis import ConditionChoices, MetricsReport, choice_statistics, summarize
+from swarmtag.analysis.choice_tables import choices_html, choices_latex, choices_markdown
 from swarmtag.analysis.html import Section, write_html
 from swarmtag.analysis.tables import (
     html_tables,
@@ -108,14 +110,31 @@ def _stored_runs(store: ResultsStore, study: Study) -> int:
     return runs
 
 
+@dataclass(frozen=True, eq=False)
+class _ScaleResult:
+    """One scale's report, carrier log and choice statistics (from the stored events)."""
+
+    report: MetricsReport
+    log: CarrierLog
+    choices: tuple[ConditionChoices, ...]
+
+
 def _scale_reports(
     store: ResultsStore, study: Study, runs: int, resamples: int
-) -> dict[str, tuple[MetricsReport, CarrierLog]]:
+) -> dict[str, _ScaleResult]:
     reports = {}
     for scale in study.scales:
-        log = store.load_log(study_key(study, scale.key), study.conditions, runs)
+        key = study_key(study, scale.key)
+        log = store.load_log(key, study.conditions, runs)
         report = summarize(log, baseline=study.baseline, n_resamples=resamples, seed=study.seed)
-        reports[scale.key] = (report, log)
+        choices = choice_statistics(
+            store.load_events(key, study.conditions, runs),
+            log=log,
+            conditions=[c.condition for c in report.conditions],
+            n_resamples=resamples,
+            seed=study.seed,
+        )
+        reports[scale.key] = _ScaleResult(report=report, log=log, choices=choices)
     return reports
 
 
@@ -128,8 +147,8 @@ def _facts(study: Study, runs: int, resamples: int, record: StudyRecord | None) 
         "urgency model": study.urgency,
         "swarm sizes": ", ".join(
             f"{s.key}: {s.scenario.robots} robots / {s.scenario.carriers} carriers, "
-            f"{s.scenario.run_ticks} ticks, arena {s.scenario.area.size:g} m, "
-            f"R = {s.scenario.detection_radius:g} m"
+            f"{s.scenario.run_ticks} ticks of {s.scenario.tick:g} s, "
+            f"arena {s.scenario.area.size:g} m, {s.scenario.perception_summary()}"
             for s in study.scales
         ),
         "master seed": str(study.seed),
@@ -162,24 +181,27 @@ def _study_sections(
             key = study_key(study, part.key)
             store.export(key, study.conditions, runs, target, fmt=export_format)
     sections = []
-    for index, (scale, (report, log)) in enumerate(reports.items()):
+    for index, (scale, result) in enumerate(reports.items()):
+        report, choices = result.report, result.choices
         folder = out_dir / study.name / scale
         (folder / "figures").mkdir(parents=True, exist_ok=True)
-        atomic_write_bytes(folder / "tables.md", markdown_tables(report).encode())
-        atomic_write_bytes(folder / "tables.tex", latex_tables(report).encode())
-        figures = write_figures(report, log, folder / "figures")
+        markdown = markdown_tables(report) + "\n" + choices_markdown(choices)
+        atomic_write_bytes(folder / "tables.md", markdown.encode())
+        latex = latex_tables(report) + "\n" + choices_latex(choices)
+        atomic_write_bytes(folder / "tables.tex", latex.encode())
+        figures = write_figures(report, result.log, folder / "figures")
         title = study.name if len(reports) == 1 else f"{study.name}, swarm {scale}"
         sections.append(
             Section(
                 title=title,
                 facts=_facts(study, runs, resamples, record) if index == 0 else {},
-                tables_html=[html_tables(report)],
+                tables_html=[html_tables(report), choices_html(choices)],
                 figures=figures,
             )
         )
     if len(reports) > 1:
         sections.append(
-            _scalability_section(out_dir, study, {k: r for k, (r, _) in reports.items()})
+            _scalability_section(out_dir, study, {k: r.report for k, r in reports.items()})
         )
     return sections
 

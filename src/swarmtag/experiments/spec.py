@@ -18,6 +18,7 @@ The file layout (every key but ``name``, ``conditions`` and ``runs`` optional)::
     ticks = 3000                # run length; the time limit for static urgency
     urgency = "growing"         # urgency model: "growing" or "static"
     seed = 0                    # master seed of the runs and of the bootstrap
+    profile = "paper-sim"       # profile of free parameters (a shipped name or a file)
     resamples = 10000           # bootstrap resamples of the metrics
     chunk_runs = 10             # runs per unit of work (results do not depend on it)
 
@@ -48,6 +49,7 @@ from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError, PolicyError, StudyError
 from swarmtag.policy import Policy, parse_policy
 from swarmtag.sim import Scenario
+from swarmtag.sim.profiles import DEFAULT_PROFILE, Profile, load_profile
 
 __all__ = ["DEFAULT_SCALE", "URGENCY_MODELS", "Scale", "Study", "read_study_file"]
 
@@ -66,6 +68,7 @@ _KEYS: Final = (
     "ticks",
     "urgency",
     "seed",
+    "profile",
     "resamples",
     "chunk_runs",
     "scenario",
@@ -169,6 +172,7 @@ class Study:
     resamples: int = 10_000
     chunk_runs: int = 10
     description: str = ""
+    profile: str = DEFAULT_PROFILE
     source: str | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
@@ -230,6 +234,11 @@ class Study:
             raise StudyError(msg)
         _folder_name(data["name"], "name")
         ticks = _int(data.get("ticks", _DEFAULT_TICKS), "ticks", low=1)
+        profile_name = _text(data.get("profile", DEFAULT_PROFILE), "profile")
+        try:
+            profile = load_profile(profile_name)
+        except ConfigError as error:
+            raise StudyError(f"profile: {error}") from None
         return cls(
             name=_text(data["name"], "name"),
             description=str(data.get("description", "")),
@@ -241,7 +250,8 @@ class Study:
             resamples=_int(data.get("resamples", 10_000), "resamples", low=1),
             chunk_runs=_int(data.get("chunk_runs", 10), "chunk_runs", low=1),
             urgency=urgency,
-            scales=_scales(data, urgency, ticks),
+            profile=profile_name,
+            scales=_scales(data, urgency, ticks, profile),
             source=source,
         )
 
@@ -293,9 +303,16 @@ def _conditions(value: object) -> tuple[str, ...]:
 
 
 def _scale_scenario(
-    base: Mapping[str, Any], extra: Mapping[str, Any], where: str, urgency: str, ticks: int
+    base: Mapping[str, Any],
+    extra: Mapping[str, Any],
+    where: str,
+    setting: tuple[str, int, Profile],
 ) -> Scenario:
-    """The scenario of one scale: the base table, the scale's keys, then run length and model."""
+    """The scenario of one scale: the profile, the base table, the scale's keys, then run length.
+
+    ``setting`` is the study's urgency model, run length and profile.
+    """
+    urgency, ticks, profile = setting
     overrides: dict[str, Any] = {key: value for key, value in extra.items() if key != "ticks"}
     run_length = _int(extra.get("ticks", ticks), f"{where}.ticks", low=1)
     overrides["urgency.model"] = urgency
@@ -304,12 +321,14 @@ def _scale_scenario(
     else:
         overrides["urgency.static_time_limit"] = run_length
     try:
-        return Scenario.from_mapping(base, overrides)
+        return profile.scenario(base, overrides)
     except ConfigError as error:
         raise StudyError(f"{where}: {error}") from None
 
 
-def _scales(data: Mapping[str, Any], urgency: str, ticks: int) -> tuple[Scale, ...]:
+def _scales(
+    data: Mapping[str, Any], urgency: str, ticks: int, profile: Profile
+) -> tuple[Scale, ...]:
     base = _table(data.get("scenario", {}), "scenario")
     for key in _STUDY_OWNED:
         if key in base:
@@ -319,14 +338,17 @@ def _scales(data: Mapping[str, Any], urgency: str, ticks: int) -> tuple[Scale, .
     if isinstance(urgency_table, Mapping) and "model" in urgency_table:
         raise StudyError("scenario.urgency.model: set the study's top-level 'urgency' instead")
     if "scales" not in data:
-        return (Scale(DEFAULT_SCALE, _scale_scenario(base, {}, "scenario", urgency, ticks)),)
+        setting = (urgency, ticks, profile)
+        return (Scale(DEFAULT_SCALE, _scale_scenario(base, {}, "scenario", setting)),)
     tables = _table(data["scales"], "scales")
     if not tables:
         raise StudyError("scales: the table is empty; remove it or name at least one scale")
     return tuple(
         Scale(
             key,
-            _scale_scenario(base, _table(extra, f"scales.{key}"), f"scales.{key}", urgency, ticks),
+            _scale_scenario(
+                base, _table(extra, f"scales.{key}"), f"scales.{key}", (urgency, ticks, profile)
+            ),
         )
         for key, extra in tables.items()
     )

@@ -15,7 +15,10 @@ moment leaves each run stored completely or not at all, and ``missing_runs``
 tells the runner what is left to compute. ``load_log`` reads rows back in
 their simulated order, so a stored log is byte-identical (as CSV) to the
 simulated one. Missing times are stored as SQL ``NULL`` (NaN in memory), a
-missing robot as ``NULL`` (-1 in memory).
+missing robot as ``NULL`` (-1 in memory); so are the optional carrier columns
+``run_end`` and ``urgency_end`` where a log has none. A store created before
+those columns existed gains them (as ``NULL``) when opened for writing, and
+reads as if they were ``NULL`` when opened read-only.
 
 DuckDB is imported lazily (the ``experiments`` extra). One process writes a
 store at a time (DuckDB locks the file); workers never touch it.
@@ -51,8 +54,11 @@ CREATE TABLE IF NOT EXISTS carriers (
     study VARCHAR NOT NULL, scale VARCHAR NOT NULL, condition VARCHAR NOT NULL,
     seed BIGINT NOT NULL, run BIGINT NOT NULL, code_version VARCHAR NOT NULL,
     "row" BIGINT NOT NULL, carrier BIGINT NOT NULL, urgency0 BIGINT NOT NULL,
-    order_time DOUBLE NOT NULL, pickup_time DOUBLE, delivery_time DOUBLE, robot BIGINT
+    order_time DOUBLE NOT NULL, pickup_time DOUBLE, delivery_time DOUBLE, robot BIGINT,
+    run_end DOUBLE, urgency_end BIGINT
 );
+ALTER TABLE carriers ADD COLUMN IF NOT EXISTS run_end DOUBLE;
+ALTER TABLE carriers ADD COLUMN IF NOT EXISTS urgency_end BIGINT;
 CREATE TABLE IF NOT EXISTS events (
     study VARCHAR NOT NULL, scale VARCHAR NOT NULL, condition VARCHAR NOT NULL,
     seed BIGINT NOT NULL, run BIGINT NOT NULL, code_version VARCHAR NOT NULL,
@@ -60,7 +66,10 @@ CREATE TABLE IF NOT EXISTS events (
     carrier BIGINT, robot BIGINT, value DOUBLE
 );
 """
-"""The store's tables (created on first open)."""
+"""The store's tables (created on first open; older stores gain the optional carrier columns)."""
+
+_OPTIONAL_CARRIER_COLUMNS: Final = {"run_end": "DOUBLE", "urgency_end": "BIGINT"}
+"""Carrier columns added after the first schema: nullable, possibly absent from an old store."""
 
 _NEEDS_EXTRA: Final = (
     "the results store needs the 'experiments' extra: pip install 'swarmtag[experiments]'"
@@ -99,7 +108,7 @@ _STORED_RUNS: Final = (
 )
 _CARRIER_ROWS: Final = (
     "SELECT condition, run, seed, carrier, urgency0, order_time, pickup_time, "
-    "delivery_time, coalesce(robot, -1) FROM carriers "
+    "delivery_time, coalesce(robot, -1), {run_end}, coalesce({urgency_end}, -1) FROM carriers "
     "WHERE study = ? AND scale = ? AND seed = ? AND code_version = ? "
     'AND condition = ? AND run < ? ORDER BY run, "row"'
 )
@@ -144,6 +153,20 @@ class ResultsStore:
             raise StoreError(msg) from None
         if not read_only:
             self._con.execute(SCHEMA_SQL)
+        self._carrier_rows = _CARRIER_ROWS.format(**self._optional_carrier_columns())
+
+    def _optional_carrier_columns(self) -> dict[str, str]:
+        """SQL for each optional carrier column: its name, or a typed NULL in an older store."""
+        present = {
+            str(row[0])
+            for row in self._con.execute(
+                "SELECT column_name FROM duckdb_columns() WHERE table_name = 'carriers'"
+            ).fetchall()
+        }
+        return {
+            name: name if name in present else f"CAST(NULL AS {kind})"
+            for name, kind in _OPTIONAL_CARRIER_COLUMNS.items()
+        }
 
     def close(self) -> None:
         """Close the connection (committed chunks are already on disk)."""
@@ -192,6 +215,8 @@ class ResultsStore:
             "pickup_time": carriers.pickup_time,
             "delivery_time": carriers.delivery_time,
             "robot": _nullable_ids(carriers.robot),
+            "run_end": carriers.run_end,
+            "urgency_end": _nullable_ids(carriers.urgency_end),
         }
         event_frame = {
             **_key_frame(key, events, event_rows),
@@ -219,9 +244,12 @@ class ResultsStore:
                 [*prefix, key.seed, key.code_version, carriers.time_unit],
             )
             con.execute(
-                "INSERT INTO carriers SELECT study, scale, condition, seed, run, code_version, "
+                "INSERT INTO carriers (study, scale, condition, seed, run, code_version, "
+                '"row", carrier, urgency0, order_time, pickup_time, delivery_time, robot, '
+                "run_end, urgency_end) "
+                "SELECT study, scale, condition, seed, run, code_version, "
                 '"row", carrier, urgency0, order_time, pickup_time, delivery_time, '
-                "CAST(robot AS BIGINT) FROM chunk_carriers"
+                "CAST(robot AS BIGINT), run_end, CAST(urgency_end AS BIGINT) FROM chunk_carriers"
             )
             con.execute(
                 "INSERT INTO events SELECT study, scale, condition, seed, run, code_version, "
@@ -271,7 +299,9 @@ class ResultsStore:
         unit = self._check_complete(key, conditions, runs)
         parts = []
         for condition in conditions:
-            rows = self._con.execute(_CARRIER_ROWS, [*key.params(), condition, runs]).fetchall()
+            rows = self._con.execute(
+                self._carrier_rows, [*key.params(), condition, runs]
+            ).fetchall()
             parts.append(_carrier_log(rows, unit))
         return CarrierLog.concat(parts)
 
@@ -353,7 +383,7 @@ def _floats(values: Sequence[Any]) -> np.ndarray[Any, Any]:
 
 
 def _carrier_log(rows: Sequence[tuple[Any, ...]], unit: str | None) -> CarrierLog:
-    cols = list(zip(*rows, strict=True)) if rows else [()] * 9
+    cols = list(zip(*rows, strict=True)) if rows else [()] * 11
     return CarrierLog(
         condition=np.array(cols[0], dtype=np.str_),
         run=np.array(cols[1], dtype=np.int64),
@@ -364,6 +394,8 @@ def _carrier_log(rows: Sequence[tuple[Any, ...]], unit: str | None) -> CarrierLo
         pickup_time=_floats(cols[6]),
         delivery_time=_floats(cols[7]),
         robot=np.array(cols[8], dtype=np.int64),
+        run_end=_floats(cols[9]),
+        urgency_end=np.array(cols[10], dtype=np.int64),
         time_unit=unit,
     )
 

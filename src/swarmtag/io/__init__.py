@@ -20,6 +20,7 @@ from swarmtag.io.csv_format import (
 from swarmtag.io.files import read_event_log, read_event_table, write_event_log, write_event_table
 from swarmtag.io.parquet_format import read_carrier_parquet, read_event_parquet, write_parquet
 from swarmtag.io.schema import (
+    CARRIER_OPTIONAL,
     CARRIER_SCHEMA,
     EVENT_SCHEMA,
     MISSING_ID,
@@ -31,6 +32,7 @@ from swarmtag.io.schema import (
 from swarmtag.io.tables import CarrierLog, EventTable
 
 __all__ = [
+    "CARRIER_OPTIONAL",
     "CARRIER_SCHEMA",
     "EVENT_SCHEMA",
     "MISSING_ID",

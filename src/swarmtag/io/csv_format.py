@@ -8,7 +8,8 @@ number a spreadsheet shows) and the column.
 
 Writing is canonical, so identical tables give byte-identical files: UTF-8
 without a byte-order mark, LF line endings, comma-separated, the schema's
-columns in order (then ``time_unit`` when the table states one), integers in
+columns in order (then each optional column that has a value, e.g.
+``run_end``, then ``time_unit`` when the table states one), integers in
 decimal, numbers as Python's ``repr`` of the float (the shortest text that
 reads back to the same float: ``12.0``, ``0.1``, ``1e-05``), empty cells for
 "never"/"none".
@@ -208,7 +209,11 @@ def _parse_table(text: str, table: type[_TableT], source: str | None) -> _TableT
         position = by_name[name]
         return np.array([cells[position] for cells in rows], dtype=str)
 
-    columns = {spec.name: _parse_column(spec, cells_of(spec.name), loc) for spec in table.SCHEMA}
+    columns = {
+        spec.name: _parse_column(spec, cells_of(spec.name), loc)
+        for spec in table.all_columns()
+        if spec.name in by_name
+    }
     time_unit = (
         _parse_time_unit(cells_of(TIME_UNIT_COLUMN), loc) if TIME_UNIT_COLUMN in by_name else None
     )
@@ -273,8 +278,9 @@ def _format_column(spec: ColumnSpec, column: NDArray[np.generic]) -> list[str]:
 
 
 def _format_rows(table: _Columns) -> tuple[list[str], Iterable[Sequence[str]]]:
-    header = [spec.name for spec in table.SCHEMA]
-    cells = [_format_column(spec, getattr(table, spec.name)) for spec in table.SCHEMA]
+    specs = table.written_columns()
+    header = [spec.name for spec in specs]
+    cells = [_format_column(spec, getattr(table, spec.name)) for spec in specs]
     if table.time_unit is not None:
         header.append(TIME_UNIT_COLUMN)
         cells.append([table.time_unit] * len(table))

@@ -3,10 +3,11 @@
 ``pyarrow`` is imported only inside these functions, so the core installs and
 imports without it. Files are written with typed columns: text as strings,
 integers as int64, numbers as float64, empty cells ("never", "none") as Parquet
-nulls, and a ``time_unit`` string column when the table states one. Reading
-accepts any integer or floating column type (integral floats for integer
-columns, as pandas writes them), nulls or NaN for empty cells, and ignores
-extra columns. Messages name the file, the 1-based data row and the column.
+nulls, optional columns (``run_end``, ``urgency_end``) only when a cell is set,
+and a ``time_unit`` string column when the table states one. Reading accepts
+any integer or floating column type (integral floats for integer columns, as
+pandas writes them), nulls or NaN for empty cells, optional columns when
+present, and ignores extra columns. Messages name the file, the 1-based data row and the column.
 """
 
 from __future__ import annotations
@@ -111,7 +112,9 @@ def _read(path: str | os.PathLike[str], table: type[_TableT]) -> _TableT:
             f"an event log has columns {', '.join(spec.name for spec in table.SCHEMA)}"
         )
     columns = {
-        spec.name: _column(pa, spec, data.column(by_name[spec.name]), loc) for spec in table.SCHEMA
+        spec.name: _column(pa, spec, data.column(by_name[spec.name]), loc)
+        for spec in table.all_columns()
+        if spec.name in by_name
     }
     time_unit = None
     if TIME_UNIT_COLUMN in by_name:
@@ -143,7 +146,7 @@ def write_parquet(table: CarrierLog | EventTable, path: str | os.PathLike[str]) 
     """Write a table as Parquet with typed columns and nulls for empty cells."""
     pa, pq = _pyarrow()
     arrays: dict[str, Any] = {}
-    for spec in table.SCHEMA:
+    for spec in table.written_columns():
         column = getattr(table, spec.name)
         if spec.kind is Kind.TEXT:
             arrays[spec.name] = pa.array(column.tolist(), type=pa.string())

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from swarmtag.errors import EventLogError
 
 __all__ = [
+    "CARRIER_OPTIONAL",
     "CARRIER_SCHEMA",
     "EVENT_SCHEMA",
     "MISSING_ID",
@@ -90,6 +91,18 @@ CARRIER_SCHEMA: Final = (
     ColumnSpec("robot", Kind.INT, nullable=True, minimum=0),
 )
 """The per-carrier table: one row per carrier per run, in the order files carry it."""
+
+CARRIER_OPTIONAL: Final = (
+    ColumnSpec("run_end", Kind.FLOAT, nullable=True),
+    ColumnSpec("urgency_end", Kind.INT, nullable=True, minimum=0, maximum=9),
+)
+"""Optional per-carrier columns (extra columns SPEC §8.1 allows), after the schema's in files.
+
+``run_end``: when the run's observation ended (one value per run; the
+censoring time of undelivered carriers). ``urgency_end``: the carrier's
+urgency when delivered, or at run end if never delivered. Absent or empty
+cells are NaN / ``MISSING_ID``; files hold a column only when a cell is set.
+"""
 
 EVENT_SCHEMA: Final = (
     ColumnSpec("condition", Kind.TEXT),

@@ -18,9 +18,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
+    CARRIER_OPTIONAL,
     CARRIER_SCHEMA,
     EVENT_SCHEMA,
+    MISSING_ID,
     ColumnSpec,
+    Kind,
     RowLocator,
     check_column,
     check_time_unit,
@@ -29,19 +32,56 @@ from swarmtag.io.schema import (
 __all__ = ["CarrierLog", "EventTable"]
 
 
+def _absent(spec: ColumnSpec, length: int) -> NDArray[np.generic]:
+    """An optional column the source did not give: every cell empty (NaN or ``MISSING_ID``)."""
+    array: NDArray[np.generic] = (
+        np.full(length, MISSING_ID, dtype=np.int64)
+        if spec.kind is Kind.INT
+        else np.full(length, np.nan)
+    )
+    array.flags.writeable = False
+    return array
+
+
 class _Columns:
     """Shared behaviour of the two tables: checked columns, length, equality, row selection."""
 
     SCHEMA: ClassVar[tuple[ColumnSpec, ...]]
+    OPTIONAL: ClassVar[tuple[ColumnSpec, ...]] = ()
+    """Columns a source may leave out (all cells empty then); after ``SCHEMA`` in files."""
     condition: NDArray[np.str_]
     time_unit: str | None
 
+    @classmethod
+    def all_columns(cls) -> tuple[ColumnSpec, ...]:
+        """Every column in memory: the schema's, then the optional ones."""
+        return cls.SCHEMA + cls.OPTIONAL
+
+    def written_columns(self) -> tuple[ColumnSpec, ...]:
+        """The columns a file of this table holds: the schema's, then optional ones with a value.
+
+        So a table without optional values is written exactly as before they existed.
+        """
+        kept = []
+        for spec in self.OPTIONAL:
+            column = getattr(self, spec.name)
+            empty = column == MISSING_ID if spec.kind is Kind.INT else np.isnan(column)
+            if not empty.all():
+                kept.append(spec)
+        return self.SCHEMA + tuple(kept)
+
     def _set_columns(
-        self, columns: Mapping[str, ArrayLike], time_unit: str | None, loc: RowLocator
+        self, columns: Mapping[str, ArrayLike | None], time_unit: str | None, loc: RowLocator
     ) -> None:
         length: int | None = None
-        for spec in self.SCHEMA:
-            array = check_column(spec, columns[spec.name], loc)
+        for spec in self.all_columns():
+            given = columns.get(spec.name)
+            if given is not None:
+                array = check_column(spec, given, loc)
+            elif spec in self.OPTIONAL:
+                array = _absent(spec, 0 if length is None else length)
+            else:
+                raise loc.table_error(f"column {spec.name} is missing; it cannot be left out")
             if length is not None and len(array) != length:
                 raise loc.table_error(
                     f"column {spec.name} has {len(array)} rows but column "
@@ -57,7 +97,7 @@ class _Columns:
 
     @classmethod
     def _build(
-        cls, columns: Mapping[str, ArrayLike], time_unit: str | None, loc: RowLocator
+        cls, columns: Mapping[str, ArrayLike | None], time_unit: str | None, loc: RowLocator
     ) -> Self:
         """Construct with messages that name a file and its lines (used by the readers)."""
         table = cls.__new__(cls)
@@ -75,13 +115,13 @@ class _Columns:
             raise EventLogError(f"cannot concatenate tables with different time units: {shown}")
         columns = {
             spec.name: np.concatenate([getattr(table, spec.name) for table in tables])
-            for spec in cls.SCHEMA
+            for spec in cls.all_columns()
         }
         return cls._build(columns, units.pop(), RowLocator())
 
     def columns(self) -> dict[str, NDArray[np.generic]]:
-        """The columns in schema order, as read-only arrays."""
-        return {spec.name: getattr(self, spec.name) for spec in self.SCHEMA}
+        """The columns in schema order (optional ones last), as read-only arrays."""
+        return {spec.name: getattr(self, spec.name) for spec in self.all_columns()}
 
     def __len__(self) -> int:
         return len(getattr(self, self.SCHEMA[0].name))
@@ -125,7 +165,10 @@ class CarrierLog(_Columns):
     copied and made read-only. The constructor checks every column's type and
     range, that a delivered carrier has a pickup time no later than its
     delivery and a robot, that no run of a condition lists a carrier twice,
-    and that a run has one seed.
+    and that a run has one seed. The optional ``run_end`` (when the run's
+    observation ended; NaN if not given) must be one value per run, not before
+    any pickup or delivery of the run; the optional ``urgency_end`` (urgency
+    when delivered, or at run end; ``MISSING_ID`` if not given) is 0-9.
 
     >>> nan = float("nan")
     >>> log = CarrierLog(
@@ -139,6 +182,7 @@ class CarrierLog(_Columns):
     """
 
     SCHEMA: ClassVar[tuple[ColumnSpec, ...]] = CARRIER_SCHEMA
+    OPTIONAL: ClassVar[tuple[ColumnSpec, ...]] = CARRIER_OPTIONAL
 
     condition: NDArray[np.str_]
     run: NDArray[np.int64]
@@ -149,6 +193,8 @@ class CarrierLog(_Columns):
     pickup_time: NDArray[np.float64]
     delivery_time: NDArray[np.float64]
     robot: NDArray[np.int64]
+    run_end: NDArray[np.float64]
+    urgency_end: NDArray[np.int64]
     time_unit: str | None
 
     def __init__(
@@ -164,6 +210,8 @@ class CarrierLog(_Columns):
         delivery_time: ArrayLike,
         robot: ArrayLike,
         time_unit: str | None = None,
+        run_end: ArrayLike | None = None,
+        urgency_end: ArrayLike | None = None,
     ) -> None:
         columns = {
             "condition": condition,
@@ -175,6 +223,8 @@ class CarrierLog(_Columns):
             "pickup_time": pickup_time,
             "delivery_time": delivery_time,
             "robot": robot,
+            "run_end": run_end,
+            "urgency_end": urgency_end,
         }
         self._set_columns(columns, time_unit, RowLocator())
 
@@ -212,6 +262,45 @@ class CarrierLog(_Columns):
                 int(bad[0]), "robot", "is empty but the carrier was delivered; name the robot"
             )
         self._check_keys(loc)
+        self._check_run_end(loc)
+
+    def _check_run_end(self, loc: RowLocator) -> None:
+        """``run_end`` is one value per run (or empty for all its rows), after its events."""
+        if len(self) == 0 or np.isnan(self.run_end).all():
+            return
+        names, codes = np.unique(self.condition, return_inverse=True)
+        order = np.lexsort((np.arange(len(self)), self.run, codes))
+        same_run = (codes[order][1:] == codes[order][:-1]) & (
+            self.run[order][1:] == self.run[order][:-1]
+        )
+        ends = self.run_end[order]
+        differs = same_run & ~((ends[1:] == ends[:-1]) | (np.isnan(ends[1:]) & np.isnan(ends[:-1])))
+        if differs.any():
+            position = int(np.flatnonzero(differs)[0])
+            first, second = int(order[position]), int(order[position + 1])
+
+            def shown(row: int) -> str:
+                value = float(self.run_end[row])
+                return "empty" if np.isnan(value) else repr(value)
+
+            raise loc.error(
+                second,
+                "run_end",
+                f"{shown(second)} differs from run_end {shown(first)} on {loc.where(first)}, "
+                f"the same run ({int(self.run[second])} of {names[codes[second]]}); "
+                "a run has one run_end",
+            )
+        for column in ("pickup_time", "delivery_time"):
+            times = getattr(self, column)
+            bad = np.flatnonzero(self.run_end < times)  # NaN on either side compares False
+            if bad.size:
+                i = int(bad[0])
+                raise loc.error(
+                    i,
+                    "run_end",
+                    f"{float(self.run_end[i])!r} is before {column} {float(times[i])!r}; "
+                    "a run ends after its last pickup and delivery",
+                )
 
     def _check_keys(self, loc: RowLocator) -> None:
         """No run of a condition lists a carrier twice, and each run has a single seed."""

@@ -13,6 +13,7 @@ Start with ``simulate``::
 The layers underneath, for other front ends and for tests:
 
 - ``Scenario`` (frozen, validated; TOML and mappings) and its parts;
+- profiles (``load_profile``, ``Profile``): named presets of the free parameters;
 - ``make_params`` -> ``Params``: the scenario and policy in kernel units;
 - ``sample_scene`` / ``Scene`` / ``initial_state`` -> ``WorldState``;
 - ``RandomSource`` -> ``TickInputs``: the per-tick random numbers of SPEC §4.5;
@@ -35,27 +36,35 @@ from swarmtag.sim.groups import (
     Reprioritisation,
     Timing,
     UrgencyModel,
+    Walk,
 )
 from swarmtag.sim.invariants import OVERLAP_TOLERANCE, check_tick
 from swarmtag.sim.kernel import step
 from swarmtag.sim.params import Params, make_params
+from swarmtag.sim.profiles import DEFAULT_PROFILE, PROFILES, Profile, load_profile
 from swarmtag.sim.randomness import RandomSource, Stream, TickInputs, stream
 from swarmtag.sim.runner import InputSource, SimResult, run_batch, seeded_state, simulate
 from swarmtag.sim.scenario import Scenario
 from swarmtag.sim.scene import sample_scene
+from swarmtag.sim.sensors import Camera, Radio
 from swarmtag.sim.state import Mode, Scene, WorldState, initial_state
 from swarmtag.sim.trajectories import Geometry, Trajectories
 
 __all__ = [
+    "DEFAULT_PROFILE",
     "OVERLAP_TOLERANCE",
+    "PROFILES",
     "Arena",
     "Bodies",
+    "Camera",
     "EventKind",
     "Geometry",
     "InputSource",
     "Mode",
     "Motion",
     "Params",
+    "Profile",
+    "Radio",
     "RandomSource",
     "Realism",
     "Reprioritisation",
@@ -68,11 +77,13 @@ __all__ = [
     "Timing",
     "Trajectories",
     "UrgencyModel",
+    "Walk",
     "WorldState",
     "check_common_scenes",
     "check_determinism",
     "check_tick",
     "initial_state",
+    "load_profile",
     "make_params",
     "run_batch",
     "run_csv",

@@ -13,7 +13,7 @@ from numbers import Integral, Real
 
 from swarmtag.errors import ConfigError
 
-__all__ = ["check_choice", "check_int", "check_number", "check_probability"]
+__all__ = ["check_bool", "check_choice", "check_int", "check_number", "check_probability"]
 
 
 def _describe_number(low: float | None, high: float | None, *, low_open: bool) -> str:
@@ -97,4 +97,18 @@ def check_choice(name: str, value: object, choices: tuple[str, ...]) -> str:
     if isinstance(value, str) and value.strip().lower() in choices:
         return value.strip().lower()
     msg = f"{name}: {value!r} is not one of {', '.join(choices)}"
+    raise ConfigError(msg)
+
+
+def check_bool(name: str, value: object) -> bool:
+    """``value`` if it is a boolean (TOML ``true``/``false``), else ``ConfigError``.
+
+    >>> check_bool("motion.avoid_taken_faces", 1)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: motion.avoid_taken_faces: 1 is not true or false
+    """
+    if isinstance(value, bool):
+        return value
+    msg = f"{name}: {value!r} is not true or false"
     raise ConfigError(msg)

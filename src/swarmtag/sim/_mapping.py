@@ -1,8 +1,9 @@
 """Scenarios to and from plain mappings and TOML files, with overrides.
 
 The mapping mirrors the dataclasses: top-level keys (``robots``,
-``carriers``, ``ticks``, ``tick``, ``detection_radius``), one table per part
-(``[arena]``, ``[bodies]``, ``[motion]``, ``[timing]``, ``[urgency]``,
+``carriers``, ``ticks``, ``tick``, ``detection_radius``, ``perception``,
+``time_unit``), one table per part (``[arena]``, ``[bodies]``, ``[motion]``,
+``[walk]``, ``[radio]``, ``[camera]``, ``[timing]``, ``[urgency]``,
 ``[realism]``) and an array of tables ``[[reprioritisations]]``. Overrides
 are merged on top (nested tables or dotted keys such as ``"arena.size"``);
 parts not given take the defaults, the arena scaled for the carrier count.
@@ -28,19 +29,33 @@ from swarmtag.sim.groups import (
     Reprioritisation,
     Timing,
     UrgencyModel,
+    Walk,
 )
+from swarmtag.sim.sensors import Camera, Radio
 
-__all__ = ["load_toml", "scenario_fields", "scenario_to_mapping"]
+__all__ = ["flat_keys", "load_toml", "merge_layers", "scenario_fields", "scenario_to_mapping"]
 
 _PARTS: Final[dict[str, type[Any]]] = {
     "arena": Arena,
     "bodies": Bodies,
     "motion": Motion,
+    "walk": Walk,
+    "radio": Radio,
+    "camera": Camera,
     "timing": Timing,
     "urgency": UrgencyModel,
     "realism": Realism,
 }
-_SCALARS: Final = ("robots", "carriers", "ticks", "tick", "detection_radius")
+_SCALARS: Final = (
+    "robots",
+    "carriers",
+    "ticks",
+    "tick",
+    "detection_radius",
+    "perception",
+    "time_unit",
+    "arena_scaling",
+)
 _EVENTS: Final = "reprioritisations"
 
 
@@ -64,6 +79,33 @@ def _merge(base: dict[str, Any], extra: Mapping[str, Any], where: str) -> dict[s
             merged[head] = _merge({}, value, f"{where}{head}.")
         else:
             merged[head] = value
+    return merged
+
+
+def flat_keys(mapping: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested tables and dotted keys alike as dotted keys.
+
+    >>> flat_keys({"tick": 0.1, "camera": {"range": 1.5}, "timing.dock": 2.0})
+    {'tick': 0.1, 'camera.range': 1.5, 'timing.dock': 2.0}
+    """
+    flat: dict[str, Any] = {}
+    for key, value in mapping.items():
+        if isinstance(value, Mapping):
+            flat.update(flat_keys(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+def merge_layers(*layers: Mapping[str, Any]) -> dict[str, Any]:
+    """Mappings merged in order, later ones winning (tables key by key, dotted keys nest).
+
+    >>> merge_layers({"camera": {"range": 1.0, "memory": 5.0}}, {"camera.range": 2.0})
+    {'camera': {'range': 2.0, 'memory': 5.0}}
+    """
+    merged: dict[str, Any] = {}
+    for layer in layers:
+        merged = _merge(merged, layer, "")
     return merged
 
 
@@ -122,7 +164,9 @@ def scenario_fields(
     carriers = check_int("carriers", merged.get("carriers", LAB_CARRIERS), low=1)
     for name, kind in _PARTS.items():
         if name in merged:
-            defaults = asdict(Arena.scaled(carriers)) if kind is Arena else asdict(kind())
+            scaling = merged.get("arena_scaling", 0.5)
+            exponent = float(scaling) if isinstance(scaling, int | float) else 0.5
+            defaults = asdict(Arena.scaled(carriers, exponent)) if kind is Arena else asdict(kind())
             kwargs[name] = _part(name, kind, merged[name], defaults)
     if _EVENTS in merged:
         kwargs[_EVENTS] = _events(merged[_EVENTS])

@@ -154,6 +154,7 @@ def _deliveries(s: WorldState, params: Params, t: int, events: TickEvents) -> No
     s.carried_by[runs, carriers] = -1
     s.delivery_time[runs, carriers] = t
     s.deliverer[runs, carriers] = robots
+    s.delivery_urgency[runs, carriers] = s.urgency[runs, carriers]
     events.add(EventKind.DELIVER, done, s.target, at_robots(s.urgency, s.target).astype(np.float64))
     to_walk(s, done)
 

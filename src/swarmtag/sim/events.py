@@ -8,6 +8,8 @@ Event kinds (the ``kind`` column), in the order they can happen in a tick:
                    AWAITING_PICKUP; ``value`` = the status it heard
 ``timeout``        a pursuit reached the timeout; the cool-down starts
 ``select``         a robot chose a carrier; ``value`` = the urgency it heard
+``candidates``     with every ``select``: ``value`` = how many candidates the
+                   robot chose among (the choice statistics of SPEC §4.2a)
 ``lift``           a robot lifted a carrier (tag -> PICKED_UP); ``value`` = urgency
 ``lift_refused``   a robot centred under a carrier could not lift it (another,
                    smaller-id robot lifted it this tick, or the tag refused the
@@ -44,10 +46,11 @@ class EventKind(IntEnum):
     ABANDON = 2
     TIMEOUT = 3
     SELECT = 4
-    LIFT = 5
-    LIFT_REFUSED = 6
-    DELIVER = 7
-    REPRIORITISE = 8
+    CANDIDATES = 5
+    LIFT = 6
+    LIFT_REFUSED = 7
+    DELIVER = 8
+    REPRIORITISE = 9
 
     @property
     def label(self) -> str:
@@ -131,8 +134,20 @@ class EventRecorder:
             )
         )
 
-    def table(self, *, condition: str, seed: int, run_ids: Int) -> EventTable:
-        """The sorted event table; ``run_ids`` maps batch positions to global run ids."""
+    def table(
+        self,
+        *,
+        condition: str,
+        seed: int,
+        run_ids: Int,
+        time_scale: float = 1.0,
+        time_unit: str = "tick",
+    ) -> EventTable:
+        """The sorted event table; ``run_ids`` maps batch positions to global run ids.
+
+        Times are ticks times ``time_scale`` (1, or the tick in seconds when
+        ``time_unit`` is ``"s"``).
+        """
         if self._rows:
             runs, ticks, kinds, carriers, robots, values = (
                 np.concatenate(column) for column in zip(*self._rows, strict=True)
@@ -147,10 +162,10 @@ class EventRecorder:
             condition=np.full(order.shape, condition),
             seed=np.full(order.shape, seed, dtype=np.int64),
             run=global_runs[order],
-            time=ticks[order].astype(np.float64),
+            time=ticks[order].astype(np.float64) * time_scale,
             kind=labels if labels.size else np.zeros(0, dtype=str),
             carrier=carriers[order],
             robot=robots[order],
             value=values[order],
-            time_unit="tick",
+            time_unit=time_unit,
         )

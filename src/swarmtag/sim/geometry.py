@@ -29,6 +29,8 @@ __all__ = [
     "contact_xy",
     "length",
     "ordered_sum",
+    "segment_crosses_box",
+    "segment_near_point",
     "step_towards",
     "turn_towards",
 ]
@@ -161,3 +163,50 @@ def clamp_to_box(position: Float, margin: Float, size: float) -> Float:
     """
     low = margin[..., None]
     return np.minimum(np.maximum(position, low), size - low)
+
+
+def segment_crosses_box(start: Float, end: Float, centre: Float, half: float) -> NDArray[np.bool_]:
+    """Whether the segment ``start``-``end`` passes through the open square ``centre`` +- ``half``.
+
+    Separating-axis test (x, y and the segment's normal), without divisions;
+    a segment that only grazes an edge or a corner does not count.
+
+    >>> segment_crosses_box(np.array([0.0, 0.0]), np.array([2.0, 0.0]), np.array([1.0, 0.1]), 0.2)
+    np.True_
+    >>> segment_crosses_box(np.array([0.0, 0.0]), np.array([2.0, 0.0]), np.array([1.0, 0.2]), 0.2)
+    np.False_
+    """
+    ex = (end[..., 0] - start[..., 0]) * 0.5
+    ey = (end[..., 1] - start[..., 1]) * 0.5
+    mx = (start[..., 0] + ex) - centre[..., 0]
+    my = (start[..., 1] + ey) - centre[..., 1]
+    ax, ay = np.abs(ex), np.abs(ey)
+    crosses: NDArray[np.bool_] = (
+        (np.abs(mx) < half + ax)
+        & (np.abs(my) < half + ay)
+        & (np.abs(ex * my - ey * mx) < half * ay + half * ax)
+    )
+    return crosses
+
+
+def segment_near_point(start: Float, end: Float, point: Float, radius: float) -> NDArray[np.bool_]:
+    """Whether the segment ``start``-``end`` passes closer than ``radius`` to ``point``.
+
+    >>> segment_near_point(np.array([0.0, 0.0]), np.array([2.0, 0.0]), np.array([1.0, 0.1]), 0.125)
+    np.True_
+    >>> segment_near_point(np.array([0.0, 0.0]), np.array([2.0, 0.0]), np.array([3.0, 0.0]), 0.5)
+    np.False_
+    """
+    dx = end[..., 0] - start[..., 0]
+    dy = end[..., 1] - start[..., 1]
+    qx = point[..., 0] - start[..., 0]
+    qy = point[..., 1] - start[..., 1]
+    squared = dx * dx + dy * dy
+    dot = qx * dx + qy * dy
+    squared = np.broadcast_to(squared, dot.shape)
+    along = np.divide(dot, squared, out=np.zeros(dot.shape), where=squared > 0)
+    along = np.minimum(np.maximum(along, 0.0), 1.0)
+    ox = qx - along * dx
+    oy = qy - along * dy
+    near: NDArray[np.bool_] = ox * ox + oy * oy < radius * radius
+    return near

@@ -7,12 +7,17 @@ zones, the predock stand-off clears the robot) live in ``Scenario``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Final
 
 from swarmtag.errors import ConfigError
-from swarmtag.sim._fields import check_choice, check_int, check_number, check_probability
+from swarmtag.sim._fields import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_number,
+    check_probability,
+)
 
 __all__ = [
     "LAB_CARRIERS",
@@ -24,6 +29,7 @@ __all__ = [
     "Reprioritisation",
     "Timing",
     "UrgencyModel",
+    "Walk",
     "seconds_to_ticks",
 ]
 
@@ -70,17 +76,19 @@ class Arena:
             raise ConfigError(msg)
 
     @classmethod
-    def scaled(cls, carriers: int) -> Arena:
-        """The lab arena scaled for ``carriers``: side and zone widths times sqrt(carriers / 7).
+    def scaled(cls, carriers: int, exponent: float = 0.5) -> Arena:
+        """The lab arena scaled for ``carriers``: side and zones times (carriers / 7)^exponent.
 
-        Fewer than 7 carriers keep the lab arena (the factor is at least 1).
+        The default exponent 0.5 keeps the lab's carrier density (per square
+        metre of arena and of pick-up area); fewer than 7 carriers keep the
+        lab arena (the factor is at least 1).
 
         >>> Arena.scaled(7) == Arena() == Arena.scaled(2)
         True
-        >>> round(Arena.scaled(28).size, 6)
-        7.5
+        >>> round(Arena.scaled(28).size, 6), round(Arena.scaled(28, exponent=0.25).size, 6)
+        (7.5, 5.303301)
         """
-        factor = max(1.0, math.sqrt(carriers / LAB_CARRIERS))
+        factor = max(1.0, (carriers / LAB_CARRIERS) ** exponent)
         lab = cls()
         return cls(
             size=lab.size * factor,
@@ -113,7 +121,10 @@ class Motion:
     A loaded robot that has made less than a quarter of its step for
     ``stuck_time`` seconds sidesteps in a random direction for
     ``sidestep_time`` seconds. Collisions are resolved in
-    ``collision_iterations`` Jacobi passes per tick.
+    ``collision_iterations`` Jacobi passes per tick. With
+    ``avoid_taken_faces`` a robot heading for a predock point on which it
+    sees another robot standing goes to another free face of its carrier
+    (the remedy for herding robots locking each other out at one point).
     """
 
     speed: float = 0.5
@@ -123,8 +134,11 @@ class Motion:
     stuck_time: float = 0.5
     sidestep_time: float = 0.5
     collision_iterations: int = 8
+    avoid_taken_faces: bool = False
 
     def __post_init__(self) -> None:
+        avoid = check_bool("motion.avoid_taken_faces", self.avoid_taken_faces)
+        object.__setattr__(self, "avoid_taken_faces", avoid)
         names = (
             "speed",
             "turn_rate",
@@ -138,6 +152,27 @@ class Motion:
             object.__setattr__(self, name, value)
         iterations = check_int("motion.collision_iterations", self.collision_iterations, low=1)
         object.__setattr__(self, "collision_iterations", iterations)
+
+
+@dataclass(frozen=True, slots=True)
+class Walk:
+    """How a searching robot wanders (SPEC §3.2 random walk).
+
+    A walking robot always takes a new random heading when it touches a wall,
+    a carrier or another robot. With ``turn_interval`` > 0 (seconds) it also
+    turns its heading every ``turn_interval`` by an angle drawn uniformly
+    from ``[-turn_angle, turn_angle]`` degrees (a correlated random walk; 180
+    gives a fresh uniform heading); 0 keeps it straight until contact.
+    """
+
+    turn_interval: float = 0.0
+    turn_angle: float = 180.0
+
+    def __post_init__(self) -> None:
+        interval = check_number("walk.turn_interval", self.turn_interval, low=0.0)
+        object.__setattr__(self, "turn_interval", interval)
+        angle = check_number("walk.turn_angle", self.turn_angle, low=0.0, high=180.0)
+        object.__setattr__(self, "turn_angle", angle)
 
 
 @dataclass(frozen=True, slots=True)

@@ -62,7 +62,12 @@ def step(state: WorldState, inputs: TickInputs, params: Params) -> tuple[WorldSt
     t = state.tick + 1
     senses = sense(state, inputs, params)
     s = replace(
-        state.copy(), tick=t, known_status=senses.known_status, known_urgency=senses.known_urgency
+        state.copy(),
+        tick=t,
+        known_status=senses.known_status,
+        known_urgency=senses.known_urgency,
+        seen_tick=senses.seen_tick,
+        seen_pos=senses.seen_pos,
     )
     events = TickEvents()
     decide(state, s, senses=senses, inputs=inputs, params=params, t=t, events=events)

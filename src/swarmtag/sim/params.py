@@ -19,6 +19,7 @@ from swarmtag.errors import ConfigError
 from swarmtag.policy import Policy
 from swarmtag.sim.groups import seconds_to_ticks
 from swarmtag.sim.scenario import Scenario
+from swarmtag.sim.sensors import OCCLUSION_MODELS
 
 __all__ = ["Params", "make_params"]
 
@@ -48,6 +49,25 @@ class Params:
     turn_sin: float
     """Cosine and sine of the largest turn in one tick."""
     detection_radius: float
+    """Disc perception: the one detection radius. Split: the camera range (for pictures)."""
+    split: bool
+    """Split perception (radio and camera apart, SPEC §4.2a) rather than one detection disc."""
+    radio_range: float
+    camera_range: float
+    occlusion: int
+    """0: nothing blocks the camera; 1: other carriers do; 2: carriers and robots do."""
+    memory_ticks: int
+    """A sighting is remembered while ``t - seen <= memory_ticks`` (0: only this tick's)."""
+    tick_us: int
+    advert_us: int
+    """Tick and advertising interval in whole microseconds: tags advertise on this grid."""
+    walk_turn_ticks: int
+    """A walking robot turns its heading every so many ticks (0: never, straight until contact)."""
+    walk_turn_angle: float
+    """Largest walk turn, radians (used only where the random step turns it into a unit vector)."""
+    avoid_taken_faces: bool
+    time_scale: float
+    """Event-log time units per tick: 1 (logs in ticks) or ``tick`` (logs in seconds)."""
     predock_offset: float
     """Carrier centre to predock point: half the carrier side plus the predock distance."""
     arrival_tolerance: float
@@ -84,7 +104,7 @@ def make_params(scenario: Scenario, policy: Policy) -> Params:
     """Kernel parameters for ``scenario`` under ``policy``.
 
     >>> from swarmtag.policy import Proximity
-    >>> p = make_params(Scenario.default(), Proximity())
+    >>> p = make_params(Scenario(), Proximity())
     >>> p.step, p.dock_ticks, p.timeout_ticks, round(p.turn_cos, 6)
     (0.05, 10, 300, 0.987688)
     """
@@ -116,7 +136,24 @@ def make_params(scenario: Scenario, policy: Policy) -> Params:
         step=motion.speed * tick,
         turn_cos=math.cos(turn),
         turn_sin=math.sin(turn),
-        detection_radius=scenario.detection_radius,
+        detection_radius=(
+            scenario.camera.range if scenario.perception == "split" else scenario.detection_radius
+        ),
+        split=scenario.perception == "split",
+        radio_range=scenario.radio.range,
+        camera_range=scenario.camera.range,
+        occlusion=OCCLUSION_MODELS.index(scenario.camera.occlusion),
+        memory_ticks=seconds_to_ticks(scenario.camera.memory, tick),
+        tick_us=max(1, round(tick * 1e6)),
+        advert_us=max(1, round(scenario.radio.interval * 1e6)),
+        walk_turn_ticks=(
+            max(1, seconds_to_ticks(scenario.walk.turn_interval, tick))
+            if scenario.walk.turn_interval > 0
+            else 0
+        ),
+        walk_turn_angle=math.radians(scenario.walk.turn_angle),
+        avoid_taken_faces=motion.avoid_taken_faces,
+        time_scale=tick if scenario.time_unit == "s" else 1.0,
         predock_offset=bodies.carrier_size / 2 + motion.predock_distance,
         arrival_tolerance=motion.arrival_tolerance,
         transport_x=arena.size - arena.dropoff_width / 2,

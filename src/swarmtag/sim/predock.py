@@ -5,7 +5,9 @@ north, west, south) at ``predock_offset`` from its centre. A point is usable
 ("free") when a robot standing there is inside the arena and overlaps no
 other carrier that is an obstacle. A robot docks at the free face whose
 predock point is nearest to it (ties: face order); a carrier with no free
-face cannot be selected until a neighbour leaves.
+face cannot be selected until a neighbour leaves. With
+``motion.avoid_taken_faces`` a face is also passed over while the robot
+sees another robot standing on its point (``taken_faces``).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from numpy.typing import NDArray
 from swarmtag.sim.geometry import FACE_NORMALS, Float, contact_push, length
 from swarmtag.sim.params import Params
 
-__all__ = ["free_faces", "nearest_free_face", "predock_points"]
+__all__ = ["free_faces", "nearest_free_face", "predock_points", "taken_faces"]
 
 
 def predock_points(carrier_pos: Float, offset: float) -> Float:
@@ -65,3 +67,26 @@ def nearest_free_face(
     distance = np.where(free, distance, np.inf)
     face = np.argmin(distance, axis=-1).astype(np.int64)
     return np.where(free.any(axis=-1), face, -1)
+
+
+def taken_faces(
+    robot_pos: Float, carrier_pos: Float, offset: float, *, body: float, sight: float
+) -> NDArray[np.bool_]:
+    """Which predock points of each robot's carrier it sees taken by another robot, (R, N, 4).
+
+    ``carrier_pos`` (R, N, 2) is each robot's carrier. Point f is taken for
+    robot n when another robot m stands within ``body`` (one diameter) of it,
+    nearer to it than n, and within ``sight`` of n (it can see m).
+    """
+    points = predock_points(carrier_pos, offset)  # (R, N, 4, 2)
+    others = robot_pos[:, None, None, :, :]  # (R, 1, 1, M, 2)
+    gap = length(others - points[:, :, :, None, :])  # (R, N, 4, M)
+    mine = length(robot_pos[:, :, None, :] - points)  # (R, N, 4)
+    apart = length(robot_pos[:, :, None, :] - robot_pos[:, None, :, :])  # (R, N, M)
+    robots = robot_pos.shape[1]
+    other = ~np.eye(robots, dtype=bool)[None, :, None, :]
+    seen = (apart <= sight)[:, :, None, :]
+    taken: NDArray[np.bool_] = np.any(
+        (gap < body) & (gap < mine[..., None]) & seen & other, axis=-1
+    )
+    return taken

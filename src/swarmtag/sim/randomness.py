@@ -14,10 +14,14 @@ k   stream     draws
                advertisement if < p
 4   camera     per tick ``standard_normal((N, C, 2))``: detection noise,
                times sigma, added to carrier ``c``'s position as seen by ``r``
+5   walk       per tick ``random(N)``: robot ``r``'s walk turn angle
+               ``(2u - 1) * a`` for the largest turn ``a``, as the unit
+               vector ``(cos, sin)`` (the one place an angle meets a
+               transcendental function, outside every kernel)
 ==  =========  =============================================================
 
 Every tick draws the full block of each stream, used or not, so no number
-depends on what other robots did. Streams 2-4 are only drawn when their
+depends on what other robots did. Streams 2-5 are only drawn when their
 option is on; being separate streams, switching one on changes no other
 number. Blocks for many ticks are drawn at once (``chunk``), which gives the
 same numbers as drawing tick by tick. A normalised direction is
@@ -54,6 +58,7 @@ class Stream(IntEnum):
     BREAKDOWN = 2
     RADIO = 3
     CAMERA = 4
+    WALK = 5
 
 
 def check_seed(seed: object) -> int:
@@ -91,7 +96,8 @@ class TickInputs:
     ``walk`` and ``sidestep`` are unit vectors (R, N, 2); ``breakdown`` (R, N)
     says who breaks down; ``heard`` (R, N, C) who receives whose advertisement
     (``None``: everyone hears everything in range); ``noise`` (R, N, C, 2) is
-    the detection error in metres (``None``: exact).
+    the detection error in metres (``None``: exact); ``turn`` (R, N, 2) is
+    each robot's walk turn as ``(cos, sin)`` (``None``: the walk does not turn).
     """
 
     walk: Float
@@ -99,6 +105,7 @@ class TickInputs:
     breakdown: NDArray[np.bool_]
     heard: NDArray[np.bool_] | None = None
     noise: Float | None = None
+    turn: Float | None = None
 
     @classmethod
     def fixed(
@@ -145,6 +152,8 @@ class RandomSource:
             self._purposes[Stream.RADIO] = (n, c)
         if params.detection_noise > 0:
             self._purposes[Stream.CAMERA] = (n, c, 2)
+        if params.walk_turn_ticks > 0:
+            self._purposes[Stream.WALK] = (n,)
         if chunk is None:
             largest = max(int(np.prod(shape)) for shape in self._purposes.values())
             chunk = max(1, min(_MAX_CHUNK, _BLOCK_BYTES // (8 * largest)))
@@ -162,7 +171,7 @@ class RandomSource:
 
     def _draw(self, ticks: int) -> None:
         for purpose, shape in self._purposes.items():
-            uniform = purpose in (Stream.BREAKDOWN, Stream.RADIO)
+            uniform = purpose in (Stream.BREAKDOWN, Stream.RADIO, Stream.WALK)
             blocks = [
                 g.random((ticks, *shape)) if uniform else g.standard_normal((ticks, *shape))
                 for g in self._generators[purpose]
@@ -182,7 +191,7 @@ class RandomSource:
             self._first, row = tick, 0
         motion = self._blocks[Stream.MOTION][row]
         params = self._params
-        heard = noise = None
+        heard = noise = turn = None
         breakdown = np.zeros(motion.shape[:2], dtype=bool)
         if Stream.BREAKDOWN in self._blocks:
             breakdown = self._blocks[Stream.BREAKDOWN][row] < params.breakdown
@@ -190,10 +199,14 @@ class RandomSource:
             heard = ~(self._blocks[Stream.RADIO][row] < params.advertisement_loss)
         if Stream.CAMERA in self._blocks:
             noise = self._blocks[Stream.CAMERA][row] * params.detection_noise
+        if Stream.WALK in self._blocks:
+            angle = (2.0 * self._blocks[Stream.WALK][row] - 1.0) * params.walk_turn_angle
+            turn = np.stack((np.cos(angle), np.sin(angle)), axis=-1)
         return TickInputs(
             walk=unit_vectors(motion[..., 0:2]),
             sidestep=unit_vectors(motion[..., 2:4]),
             breakdown=breakdown,
             heard=heard,
             noise=noise,
+            turn=turn,
         )

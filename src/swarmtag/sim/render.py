@@ -2,8 +2,10 @@
 
 Drawn from ``Trajectories`` alone: the arena in metres with axes, the
 pick-up and drop-off areas shaded, carriers as squares showing their urgency
-digit (coloured by urgency while AWAITING_PICKUP, grey otherwise), a dotted
-detection circle of radius R around every carrier that can be heard, robots
+digit (coloured by urgency while AWAITING_PICKUP, grey otherwise), the
+perception ranges dotted (disc model: a circle of radius R around every
+carrier that can be heard; split model: each robot's camera range around it,
+and its radio range dash-dotted where it falls inside the picture), robots
 as circles with a heading tick, and a dashed line from each pursuing robot
 to its chosen carrier. Matplotlib is imported lazily (the ``plot`` extra).
 """
@@ -83,7 +85,7 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
         x, y = carrier_pos[c]
         u = int(urgency[c])
         awaiting = status[c] == TagStatus.AWAITING_PICKUP
-        if awaiting:
+        if awaiting and geo.radio_range == 0.0:
             ax.add_patch(
                 Circle((x, y), geo.detection_radius, fill=False, linestyle=":", linewidth=0.8,
                        edgecolor="0.45", zorder=1)
@@ -103,6 +105,12 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
             tx, ty = carrier_pos[target]
             ax.plot([x, tx], [y, ty], color=_ROBOT_COLOUR, linewidth=1.0, linestyle="--", zorder=2)
         colour = _BROKEN_COLOUR if mode == Mode.BROKEN else _ROBOT_COLOUR
+        if geo.radio_range > 0.0:
+            for radius, style in ((geo.detection_radius, ":"), (geo.radio_range, "-.")):
+                ax.add_patch(
+                    Circle((x, y), radius, fill=False, linestyle=style, linewidth=0.8,
+                           edgecolor=_ROBOT_COLOUR, alpha=0.6, zorder=1)
+                )  # fmt: skip
         ax.add_patch(Circle((x, y), geo.robot_radius, facecolor=colour, edgecolor="black",
                             linewidth=1.0, alpha=0.9, zorder=5))  # fmt: skip
         hx, hy = traj.robot_heading[row, index, r]
@@ -116,13 +124,18 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
     )
 
 
-def _figure() -> tuple[Any, Figure, Axes]:
+def _figure(traj: Trajectories) -> tuple[Any, Figure, Axes]:
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.4, 5.6), dpi=110)
+    geo = traj.geometry
+    ranges = (
+        f"dotted: camera range {geo.detection_radius:g} m, dash-dot: radio {geo.radio_range:g} m"
+        if geo.radio_range > 0.0
+        else f"dotted: detection range R = {geo.detection_radius:g} m"
+    )
     fig.text(
         0.5, 0.01,
-        "robots: circles (dashed: chosen carrier)   carriers: squares with urgency   "
-        "dotted: detection range R",
+        f"robots: circles (dashed: chosen carrier)   carriers: squares with urgency\n{ranges}",
         ha="center", fontsize=7, color="0.3",
     )  # fmt: skip
     return plt, fig, ax
@@ -137,7 +150,7 @@ def snapshot(
     if not 0 <= chosen <= traj.ticks:
         msg = f"tick: {chosen} is outside the recorded ticks 0-{traj.ticks}"
         raise ConfigError(msg)
-    plt, fig, ax = _figure()
+    plt, fig, ax = _figure(traj)
     try:
         _draw(ax, traj, row, chosen)
         fig.tight_layout(rect=(0, 0.03, 1, 1))
@@ -173,7 +186,7 @@ def animate(
     frames = list(range(0, end + 1, every))
     if frames[-1] != end:
         frames.append(end)
-    plt, fig, ax = _figure()
+    plt, fig, ax = _figure(traj)
     from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
 
     writer: Any

@@ -63,11 +63,18 @@ class SimResult:
 
 
 def carrier_log(state: WorldState, params: Params, *, seed: int) -> CarrierLog:
-    """The per-carrier event log (SPEC §8.1) of ``state``: one row per carrier per run."""
+    """The per-carrier event log (SPEC §8.1) of ``state``: one row per carrier per run.
+
+    Times are ticks, or seconds (ticks times ``tick``) when the scenario's
+    ``time_unit`` is ``"s"``. ``run_end`` is when the run ended (every carrier
+    delivered, or its time limit); ``urgency_end`` each carrier's urgency when
+    delivered, or at the run's end.
+    """
     runs, carriers = state.status.shape
+    scale = params.time_scale
 
     def times(ticks: Int) -> np.ndarray:
-        return np.where(ticks >= 0, ticks.astype(np.float64), np.nan).reshape(-1)
+        return np.where(ticks >= 0, ticks.astype(np.float64) * scale, np.nan).reshape(-1)
 
     return CarrierLog(
         condition=np.full(runs * carriers, params.condition),
@@ -75,11 +82,17 @@ def carrier_log(state: WorldState, params: Params, *, seed: int) -> CarrierLog:
         seed=np.full(runs * carriers, seed, dtype=np.int64),
         carrier=np.tile(params.markers, runs),
         urgency0=state.urgency0.reshape(-1).astype(np.int64),
-        order_time=state.order_time.reshape(-1),
+        order_time=state.order_time.reshape(-1) * scale + 0.0,
         pickup_time=times(state.pickup_time),
         delivery_time=times(state.delivery_time),
         robot=state.deliverer.reshape(-1),
-        time_unit="tick",
+        run_end=np.repeat(
+            times(np.where(state.ended_at >= 0, state.ended_at, state.tick)), carriers
+        ),
+        urgency_end=np.where(state.delivery_urgency >= 0, state.delivery_urgency, state.urgency)
+        .reshape(-1)
+        .astype(np.int64),
+        time_unit=params.scenario.time_unit,
     )
 
 
@@ -125,7 +138,13 @@ def run_batch(
     ).sum(axis=1)
     return SimResult(
         carriers=carrier_log(state, params, seed=seed),
-        events=events.table(condition=params.condition, seed=seed, run_ids=state.run_ids),
+        events=events.table(
+            condition=params.condition,
+            seed=seed,
+            run_ids=state.run_ids,
+            time_scale=params.time_scale,
+            time_unit=params.scenario.time_unit,
+        ),
         run_ids=state.run_ids.copy(),
         delivered=delivered.astype(np.int64),
         undelivered=(params.carriers - delivered).astype(np.int64),

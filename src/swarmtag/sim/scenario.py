@@ -8,9 +8,9 @@ it from keywords, ``Scenario.default(robots, carriers)``, a mapping
 ``ConfigError`` naming the field and the allowed range.
 
 Larger swarms: unless an ``arena`` is given, its side and both zone widths
-scale with ``sqrt(carriers / 7)`` (never below 1) so that carrier density
-(carriers per square metre of arena and of pick-up area) stays that of the
-3 / 7 lab set-up.
+scale with ``(carriers / 7) ** arena_scaling`` (never below 1); the default
+0.5 keeps carrier density (carriers per square metre of arena and of
+pick-up area) that of the 3 / 7 lab set-up.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from dataclasses import dataclass, field, fields
 from typing import Any, Final
 
 from swarmtag.errors import ConfigError
-from swarmtag.sim._fields import check_int, check_number
+from swarmtag.sim._fields import check_choice, check_int, check_number
 from swarmtag.sim._mapping import load_toml, scenario_fields, scenario_to_mapping
 from swarmtag.sim.groups import (
     Arena,
@@ -32,12 +32,16 @@ from swarmtag.sim.groups import (
     Reprioritisation,
     Timing,
     UrgencyModel,
+    Walk,
 )
+from swarmtag.sim.sensors import PERCEPTION_MODELS, Camera, Radio
 
-__all__ = ["MAX_CARRIERS", "Scenario"]
+__all__ = ["MAX_CARRIERS", "TIME_UNITS", "Scenario"]
 
 MAX_CARRIERS: Final = 256
 """Marker ids are one byte on the wire (SPEC §2.1): carriers are numbered 0-255."""
+TIME_UNITS: Final = ("tick", "s")
+"""``Scenario.time_unit``: event-log times in ticks, or in seconds of robot time."""
 
 
 def _grid_capacity(width: float, height: float, body: float, pitch: float) -> int:
@@ -53,9 +57,15 @@ class Scenario:
 
     ``ticks`` is the run length T of the growing model; static runs end when
     every carrier is delivered or at ``urgency.static_time_limit``. ``arena``
-    defaults to the lab arena scaled for ``carriers`` (see the module docs).
+    defaults to the lab arena scaled for ``carriers`` by the exponent
+    ``arena_scaling`` (see the module docs).
+    ``perception`` is ``"disc"`` (one ``detection_radius``) or ``"split"``
+    (``radio`` and ``camera``, SPEC §4.2a); ``time_unit`` is the unit of the
+    event logs' times (``"tick"``, or ``"s"``: ticks times ``tick``).
+    The field defaults are the base model (the simulator before profiles);
+    ``Scenario.default`` starts from a profile (``swarmtag.sim.profiles``).
 
-    >>> s = Scenario.default()
+    >>> s = Scenario()
     >>> s.robots, s.carriers, s.arena.size, s.tick, s.run_ticks
     (3, 7, 3.75, 0.1, 3000)
     >>> Scenario(robots=0)
@@ -69,9 +79,15 @@ class Scenario:
     ticks: int = 3000
     tick: float = 0.1
     detection_radius: float = 1.0
+    perception: str = "disc"
+    time_unit: str = "tick"
+    arena_scaling: float = 0.5
     arena: Arena | None = None
     bodies: Bodies = field(default_factory=Bodies)
     motion: Motion = field(default_factory=Motion)
+    walk: Walk = field(default_factory=Walk)
+    radio: Radio = field(default_factory=Radio)
+    camera: Camera = field(default_factory=Camera)
     timing: Timing = field(default_factory=Timing)
     urgency: UrgencyModel = field(default_factory=UrgencyModel)
     realism: Realism = field(default_factory=Realism)
@@ -85,12 +101,20 @@ class Scenario:
         object.__setattr__(self, "tick", check_number("tick", self.tick, low=0.0, low_open=True))
         radius = check_number("detection_radius", self.detection_radius, low=0.0, low_open=True)
         object.__setattr__(self, "detection_radius", radius)
+        perception = check_choice("perception", self.perception, PERCEPTION_MODELS)
+        object.__setattr__(self, "perception", perception)
+        object.__setattr__(self, "time_unit", check_choice("time_unit", self.time_unit, TIME_UNITS))
+        scaling = check_number("arena_scaling", self.arena_scaling, low=0.0, high=1.0)
+        object.__setattr__(self, "arena_scaling", scaling)
         if self.arena is None:
-            object.__setattr__(self, "arena", Arena.scaled(carriers))
+            object.__setattr__(self, "arena", Arena.scaled(carriers, scaling))
         for name, kind in (
             ("arena", Arena),
             ("bodies", Bodies),
             ("motion", Motion),
+            ("walk", Walk),
+            ("radio", Radio),
+            ("camera", Camera),
             ("timing", Timing),
             ("urgency", UrgencyModel),
             ("realism", Realism),
@@ -110,9 +134,15 @@ class Scenario:
         self._check_events()
 
     @classmethod
-    def default(cls, robots: int = 3, carriers: int = 7) -> Scenario:
-        """SPEC defaults for ``robots`` / ``carriers``, the arena scaled by the density rule."""
-        return cls(robots=robots, carriers=carriers)
+    def default(cls, robots: int = 3, carriers: int = 7, *, profile: str = "paper-sim") -> Scenario:
+        """The default world for ``robots`` / ``carriers``: a profile (SPEC §4.6), arena scaled.
+
+        ``profile`` is a shipped profile's name or a profile file; the field
+        defaults of ``Scenario()`` are the ``base`` profile.
+        """
+        from swarmtag.sim.profiles import load_profile  # noqa: PLC0415 - profiles build scenarios
+
+        return load_profile(profile).scenario({"robots": robots, "carriers": carriers})
 
     @classmethod
     def from_mapping(
@@ -147,10 +177,26 @@ class Scenario:
     def to_mapping(self) -> dict[str, Any]:
         """Plain nested values that ``from_mapping`` reads back into an equal scenario.
 
-        >>> Scenario.from_mapping(Scenario.default().to_mapping()) == Scenario.default()
+        >>> Scenario.from_mapping(Scenario().to_mapping()) == Scenario()
         True
         """
         return scenario_to_mapping({f.name: getattr(self, f.name) for f in fields(self)})
+
+    def perception_summary(self) -> str:
+        """One line on how robots perceive carriers, for headers and reports.
+
+        >>> Scenario().perception_summary()
+        'disc perception, R = 1 m'
+        >>> Scenario(perception="split").perception_summary()
+        'camera 1 m (occlusion none, memory 0 s), radio 10 m every 0.25 s'
+        """
+        if self.perception == "disc":
+            return f"disc perception, R = {self.detection_radius:g} m"
+        camera, radio = self.camera, self.radio
+        return (
+            f"camera {camera.range:g} m (occlusion {camera.occlusion}, memory {camera.memory:g} s),"
+            f" radio {radio.range:g} m every {radio.interval:g} s"
+        )
 
     @property
     def area(self) -> Arena:

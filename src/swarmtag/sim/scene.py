@@ -17,7 +17,10 @@ scene in every condition:
 4. ``rng.standard_normal((N, 2))``, normalised: initial headings (and
    random-walk directions);
 5. ``rng.standard_normal(N)``: speed factors ``clip(1 + v * z, 0.5, 1.5)``
-   for speed variation v (exactly 1 when v = 0).
+   for speed variation v (exactly 1 when v = 0);
+6. ``rng.random(C)``: each tag's advertising phase, as a fraction of the
+   advertising interval (drawn last, so the draws above are those of the
+   simulator before it had phases).
 """
 
 from __future__ import annotations
@@ -108,6 +111,7 @@ def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
     )
     heading = unit_vectors(rng.standard_normal((params.robots, 2)))
     factor = np.clip(1.0 + params.speed_variation * rng.standard_normal(params.robots), 0.5, 1.5)
+    phase = rng.random(params.carriers)
     return Scene(
         robot_pos=robot_pos,
         carrier_pos=carrier_pos,
@@ -117,4 +121,5 @@ def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
         heading=heading,
         speed_factor=factor,
         status=np.full(params.carriers, TagStatus.AWAITING_PICKUP, dtype=np.int8),
+        advert_phase=phase,
     )

@@ -1,11 +1,23 @@
-"""Phase 1 of a tick, sense: what each robot detects and hears (SPEC §4.2, §4.5).
+"""Phase 1 of a tick, sense: what each robot hears and sees (SPEC §4.2, §4.2a, §4.5).
 
-Robots sense the world as it was at the end of the previous tick. A robot
-detects a carrier when the centres are at most R apart (the carrier being in
-the arena) and then hears its tag's advertisement, unless the radio loses it
-this tick. Tags advertise their state of ``status_delay`` ticks earlier.
-Each robot keeps the last status and urgency it heard per tag (its BLE
-cache); the camera's distance may carry noise.
+Robots sense the world as it was at the end of the previous tick. Tags
+advertise their state of ``status_delay`` ticks earlier; each robot keeps
+the last status and urgency it heard per tag (its BLE cache). Two models:
+
+- **split** (radio and camera apart, as on the robot). The radio hears tag
+  c when c is in the arena, within ``radio.range``, advertised during this
+  tick (once per advertising interval, at the tag's own phase, on a grid of
+  whole microseconds) and the advertisement is not lost. The camera sees
+  carrier c when it is in the arena and not carried, within
+  ``camera.range`` (centre to centre), and, with occlusion, the segment
+  between the centres crosses no other such carrier's footprint (nor, with
+  ``carriers+robots``, passes within a radius of another robot's centre).
+  A sighting records the tick and the position seen (true position plus
+  camera noise); the position is *known* while ``t - seen <= memory``.
+- **disc** (the model before profiles). Carrier c within
+  ``detection_radius`` is seen and heard (unless lost), every tick.
+
+The distance used for selection is from the robot to the known position.
 """
 
 from __future__ import annotations
@@ -15,26 +27,30 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag.sim.geometry import Float, length
+from swarmtag.sim.geometry import Float, length, segment_crosses_box, segment_near_point
 from swarmtag.sim.params import Params
 from swarmtag.sim.randomness import TickInputs
-from swarmtag.sim.state import WorldState
+from swarmtag.sim.state import Int, WorldState
 
-__all__ = ["Senses", "sense"]
+__all__ = ["Senses", "advertised", "advertising", "line_of_sight", "sense"]
 
 
 @dataclass(frozen=True, eq=False)
 class Senses:
-    """What the robots perceive this tick, shapes (R, N, C)."""
+    """What the robots perceive this tick, shapes (R, N, C) (positions (R, N, C, 2))."""
 
-    in_range: NDArray[np.bool_]
-    """Carrier detected: in the arena and within the detection radius."""
+    known: NDArray[np.bool_]
+    """Carrier position known from the camera: seen now or, with memory, recently."""
     distance: Float
-    """Robot-to-carrier distance as measured (true distance plus camera noise)."""
+    """Distance from the robot to the carrier's known position (camera noise included)."""
     known_status: NDArray[np.int8]
     """Each robot's cache of tag statuses after this tick's advertisements (-1 never heard)."""
     known_urgency: NDArray[np.int8]
     """Each robot's cache of tag urgencies after this tick's advertisements."""
+    seen_tick: Int
+    """Tick of each robot's last sighting of each carrier, this tick's included (-1 never)."""
+    seen_pos: Float
+    """Where each robot last saw each carrier."""
 
 
 def advertised(state: WorldState, params: Params) -> tuple[NDArray[np.int8], NDArray[np.int8]]:
@@ -43,20 +59,90 @@ def advertised(state: WorldState, params: Params) -> tuple[NDArray[np.int8], NDA
     return state.adv_status[:, slot], state.adv_urgency[:, slot]
 
 
+def advertising(phase: Int, tick: int, params: Params) -> NDArray[np.bool_]:
+    """Which tags send an advertisement during ``tick`` (1-based), shape of ``phase``.
+
+    Tag c advertises at ``phase[c] + k * interval`` (microseconds); tick t
+    covers ``((t - 1) * tick, t * tick]``. Integer arithmetic only.
+
+    >>> from swarmtag.sim import Scenario, make_params
+    >>> from swarmtag.policy import Proximity
+    >>> p = make_params(Scenario(tick=0.1, perception="split"), Proximity())
+    >>> [bool(advertising(np.array([0]), t, p)[0]) for t in range(1, 6)]
+    [False, False, True, False, True]
+    """
+    interval = params.advert_us
+    now = (tick * params.tick_us - phase) // interval
+    before = ((tick - 1) * params.tick_us - phase) // interval
+    sent: NDArray[np.bool_] = now > before
+    return sent
+
+
+def line_of_sight(
+    state: WorldState, visible: NDArray[np.bool_], params: Params
+) -> NDArray[np.bool_]:
+    """``visible`` (R, N, C) with the sightings whose line of sight is blocked removed.
+
+    Occluders: other carriers in the arena and not carried (their squares),
+    and with ``carriers+robots`` the other robots (their discs).
+    """
+    runs, robots, carriers = np.nonzero(visible)
+    if runs.size == 0:
+        return visible
+    start = state.robot_pos[runs, robots]  # (K, 2)
+    end = state.carrier_pos[runs, carriers]
+    others = state.carrier_pos[runs]  # (K, C, 2)
+    blocking = (state.present & (state.carried_by < 0))[runs]
+    blocking &= np.arange(state.carrier_pos.shape[1])[None, :] != carriers[:, None]
+    crosses = segment_crosses_box(start[:, None, :], end[:, None, :], others, params.carrier_half)
+    blocked = (crosses & blocking).any(axis=1)
+    if params.occlusion >= 2:
+        bodies = state.robot_pos[runs]  # (K, N, 2)
+        near = segment_near_point(start[:, None, :], end[:, None, :], bodies, params.robot_radius)
+        near &= np.arange(state.robot_pos.shape[1])[None, :] != robots[:, None]
+        blocked |= near.any(axis=1)
+    result = visible.copy()
+    result[runs[blocked], robots[blocked], carriers[blocked]] = False
+    return result
+
+
 def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     """Detections and the updated tag caches, from ``state`` (the end of the previous tick)."""
+    t = state.tick + 1
     offset = state.carrier_pos[:, None, :, :] - state.robot_pos[:, :, None, :]  # (R, N, C, 2)
     distance = length(offset)
-    in_range = state.present[:, None, :] & (distance <= params.detection_radius)
-    heard = in_range if inputs.heard is None else in_range & inputs.heard
+    present = state.present[:, None, :]
+    if params.split:
+        heard = present & (distance <= params.radio_range)
+        heard &= advertising(state.advert_phase, t, params)[:, None, :]
+        visible = present & (state.carried_by < 0)[:, None, :] & (distance <= params.camera_range)
+        if params.occlusion:
+            visible = line_of_sight(state, visible, params)
+    else:
+        heard = visible = present & (distance <= params.detection_radius)
+    if inputs.heard is not None:
+        heard = heard & inputs.heard
     status, urgency = advertised(state, params)
     known_status = np.where(heard, status[:, None, :], state.known_status)
     known_urgency = np.where(heard, urgency[:, None, :], state.known_urgency)
+
+    seen = state.carrier_pos[:, None, :, :]
     if inputs.noise is not None:
-        distance = length(offset + inputs.noise)
+        seen = seen + inputs.noise
+    seen_pos = np.where(visible[..., None], seen, state.seen_pos)
+    seen_tick = np.where(visible, t, state.seen_tick)
+    if params.split and params.memory_ticks > 0:
+        known = (seen_tick >= 0) & (t - seen_tick <= params.memory_ticks)
+        known &= present
+        measured = length(seen_pos - state.robot_pos[:, :, None, :])
+    else:
+        known = visible
+        measured = distance if inputs.noise is None else length(offset + inputs.noise)
     return Senses(
-        in_range=in_range,
-        distance=distance,
+        known=known,
+        distance=measured,
         known_status=known_status,
         known_urgency=known_urgency,
+        seen_tick=seen_tick,
+        seen_pos=seen_pos,
     )

@@ -100,6 +100,12 @@ class WorldState:
     """(R, N, C) status last heard from each tag; -1 never heard."""
     known_urgency: NDArray[np.int8]
     """(R, N, C) urgency last heard from each tag (0 if never heard)."""
+    seen_tick: Int
+    """(R, N, C) tick in which the robot's camera last saw each carrier; -1 never."""
+    seen_pos: Float
+    """(R, N, C, 2) where the camera saw each carrier then (true position plus camera noise)."""
+    walk_clock: Int
+    """(R, N) ticks since the walking robot last took a new heading (correlated walk)."""
     # carriers and their tags
     carrier_pos: Float
     """(R, C, 2) centre, metres."""
@@ -119,6 +125,8 @@ class WorldState:
     """(R, C) order (target) time, ticks, <= 0."""
     free_face: NDArray[np.bool_]
     """(R, C, 4) usable predock faces."""
+    advert_phase: Int
+    """(R, C) microseconds into the advertising interval at which each tag advertises."""
     adv_status: NDArray[np.int8]
     """(R, D + 1, C) tag status at the end of recent ticks, slot ``t % (D + 1)`` for tick t."""
     adv_urgency: NDArray[np.int8]
@@ -129,6 +137,8 @@ class WorldState:
     """(R, C) tick of the release in the drop-off area; -1 never."""
     deliverer: Int
     """(R, C) robot that delivered it; -1 none."""
+    delivery_urgency: NDArray[np.int8]
+    """(R, C) the tag's urgency when it was delivered; -1 not delivered."""
     ended_at: Int
     """(R,) tick at which the run ended (all carriers delivered or time limit); -1 running."""
 
@@ -172,7 +182,9 @@ class Scene:
     Positions are metres, ``heading`` unit vectors (default +x), ``speed_factor``
     multiplies the nominal speed (default 1). ``w0`` is the growing model's
     initial waiting time (NaN: the urgency does not grow); ``status`` defaults
-    to AWAITING_PICKUP. Shapes are checked by ``initial_state``.
+    to AWAITING_PICKUP; ``advert_phase`` (default 0) is where in its
+    advertising interval each tag advertises, as a fraction in [0, 1).
+    Shapes are checked by ``initial_state``.
     """
 
     robot_pos: Float
@@ -183,6 +195,7 @@ class Scene:
     heading: Float
     speed_factor: Float
     status: NDArray[np.int8]
+    advert_phase: Float
 
     @classmethod
     def build(
@@ -196,6 +209,7 @@ class Scene:
         heading: ArrayLike | None = None,
         speed_factor: ArrayLike | None = None,
         status: ArrayLike | None = None,
+        advert_phase: ArrayLike | None = None,
     ) -> Scene:
         """A scene from lists, with defaults for what is left out (tests, examples).
 
@@ -230,6 +244,12 @@ class Scene:
                 (c,),
                 np.int8,
             ),
+            advert_phase=_array(
+                "advert_phase",
+                np.zeros(c) if advert_phase is None else advert_phase,
+                (c,),
+                np.float64,
+            ),
         )
 
 
@@ -245,6 +265,7 @@ def _check_scene(scene: Scene, params: Params, position: int) -> None:
         ("order_time", (c,)),
         ("w0", (c,)),
         ("status", (c,)),
+        ("advert_phase", (c,)),
     ):
         actual = np.shape(getattr(scene, name))
         if actual != shape:
@@ -255,6 +276,10 @@ def _check_scene(scene: Scene, params: Params, position: int) -> None:
         raise ConfigError(msg)
     if np.any((scene.urgency0 < 0) | (scene.urgency0 > 9)):
         msg = f"{where}: urgency0 must be integers 0-9"
+        raise ConfigError(msg)
+    phase = np.asarray(scene.advert_phase)
+    if not np.all((phase >= 0.0) & (phase < 1.0)):
+        msg = f"{where}: advert_phase must be fractions in [0, 1)"
         raise ConfigError(msg)
 
 
@@ -307,6 +332,9 @@ def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -
         blocked_until=np.zeros((runs, n, c), dtype=np.int64),
         known_status=np.full((runs, n, c), -1, dtype=np.int8),
         known_urgency=np.zeros((runs, n, c), dtype=np.int8),
+        seen_tick=np.full((runs, n, c), -1, dtype=np.int64),
+        seen_pos=np.zeros((runs, n, c, 2)),
+        walk_clock=robots(0),
         carrier_pos=carrier_pos,
         status=status,
         urgency=urgency0.copy(),
@@ -316,10 +344,14 @@ def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -
         urgency0=urgency0,
         order_time=stack("order_time", np.float64).reshape(runs, c),
         free_face=free_faces(carrier_pos, present, params),
+        advert_phase=np.floor(
+            stack("advert_phase", np.float64).reshape(runs, c) * params.advert_us
+        ).astype(np.int64),
         adv_status=np.repeat(status[:, None, :], slots, axis=1),
         adv_urgency=np.repeat(urgency0[:, None, :], slots, axis=1),
         pickup_time=np.full((runs, c), -1, dtype=np.int64),
         delivery_time=np.full((runs, c), -1, dtype=np.int64),
         deliverer=np.full((runs, c), -1, dtype=np.int64),
+        delivery_urgency=np.full((runs, c), -1, dtype=np.int8),
         ended_at=np.full(runs, -1, dtype=np.int64),
     )

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import os
 import zipfile
-from dataclasses import asdict, dataclass, fields
+from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Any, Final
 
 import numpy as np
@@ -29,7 +29,12 @@ __all__ = ["Geometry", "Trajectories", "TrajectoryRecorder"]
 
 @dataclass(frozen=True)
 class Geometry:
-    """The static picture: arena ``[0, arena]^2`` (m), zones, detection radius, body sizes."""
+    """The static picture: arena ``[0, arena]^2`` (m), zones, perception ranges, body sizes.
+
+    ``detection_radius`` is the disc model's radius, or the camera range of
+    split perception; ``radio_range`` is the BLE range of split perception
+    (0 for the disc model, where the two are one).
+    """
 
     arena: float
     pickup_right: float
@@ -40,6 +45,7 @@ class Geometry:
     robot_radius: float
     carrier_size: float
     tick_seconds: float
+    radio_range: float = 0.0
 
     @classmethod
     def from_params(cls, params: Params) -> Geometry:
@@ -52,6 +58,7 @@ class Geometry:
             robot_radius=params.robot_radius,
             carrier_size=2 * params.carrier_half,
             tick_seconds=params.scenario.tick,
+            radio_range=params.radio_range if params.split else 0.0,
         )
 
 
@@ -109,7 +116,11 @@ class Trajectories:
                     msg = f"{where}: not a swarmtag trajectories file ({_FORMAT})"
                     raise ConfigError(msg)
                 geometry = Geometry(
-                    **{f.name: float(data[f"geometry.{f.name}"]) for f in fields(Geometry)}
+                    **{
+                        f.name: float(data[f"geometry.{f.name}"])
+                        for f in fields(Geometry)
+                        if f"geometry.{f.name}" in data or f.default is MISSING
+                    }
                 )
                 arrays = {f.name: data[f.name] for f in fields(cls) if f.name not in _SCALARS}
                 return cls(
