@@ -1,7 +1,8 @@
 """Speed of the numpy simulation kernel: robot-ticks per second, batched over runs.
 
-Run: ``.venv/bin/python benchmarks/bench_sim.py`` — steps a fixed number of
-ticks for 3, 20 and 200 robots and prints robot-ticks per second of
+Run: ``.venv/bin/python benchmarks/bench_sim.py [--profile NAME ...]`` — steps
+a fixed number of ticks for 3, 20 and 200 robots under each profile (default:
+``base`` and ``paper-sim``) and prints robot-ticks per second of
 ``run_batch`` (random draws, kernel, event recording; scene sampling
 excluded). Rates count the ticks actually stepped, so a batch whose runs all
 end early is still measured fairly.
@@ -13,7 +14,7 @@ import argparse
 import time
 
 from swarmtag.policy import Urgency
-from swarmtag.sim import RandomSource, Scenario, make_params, run_batch, seeded_state
+from swarmtag.sim import RandomSource, load_profile, make_params, run_batch, seeded_state
 
 # (robots, carriers, runs, ticks): carriers per the density rule; runs fill the batch.
 CASES = [
@@ -25,9 +26,12 @@ CASES = [
 ]
 
 
-def bench(robots: int, carriers: int, runs: int, ticks: int, repeat: int) -> float:
+def bench(profile: str, case: tuple[int, int, int, int], repeat: int) -> float:
     """Best robot-ticks per second over ``repeat`` batches."""
-    scenario = Scenario(robots=robots, carriers=carriers, ticks=10 * ticks)
+    robots, carriers, runs, ticks = case
+    scenario = load_profile(profile).scenario(
+        {"robots": robots, "carriers": carriers, "ticks": 10 * ticks}
+    )
     params = make_params(scenario, Urgency(alpha=0.7))
     best = 0.0
     for _ in range(repeat):
@@ -45,11 +49,19 @@ def main() -> None:
     """Print robot-ticks per second for each case."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=3, help="batches per case, best kept")
+    parser.add_argument("--profile", action="append", help="profile(s) to measure")
     args = parser.parse_args()
-    print(f"{'robots':>6} {'carriers':>8} {'runs':>5} {'ticks':>5} {'robot-ticks/s':>14}")
-    for robots, carriers, runs, ticks in CASES:
-        rate = bench(robots, carriers, runs, ticks, args.repeat)
-        print(f"{robots:>6} {carriers:>8} {runs:>5} {ticks:>5} {rate:>14,.0f}")
+    header = ("profile", "robots", "carriers", "runs", "ticks", "robot-ticks/s")
+    print(
+        " ".join(
+            f"{name:>{width}}" for name, width in zip(header, (10, 6, 8, 5, 5, 14), strict=True)
+        )
+    )
+    for profile in args.profile or ["base", "paper-sim"]:
+        for case in CASES:
+            rate = bench(profile, case, args.repeat)
+            robots, carriers, runs, ticks = case
+            print(f"{profile:>10} {robots:>6} {carriers:>8} {runs:>5} {ticks:>5} {rate:>14,.0f}")
 
 
 if __name__ == "__main__":

@@ -80,8 +80,16 @@ def _shadow_scene():
 
 @pytest.mark.parametrize(("occlusion", "seen"), [("none", True), ("carriers", False)])
 def test_other_carriers_block_the_line_of_sight(occlusion, seen):
+    # a little memory, so that every sighting is recorded (without memory only those a
+    # walking robot can act on are looked at: carriers it heard AWAITING_PICKUP)
     params = split_params(
-        carriers=2, **{"camera.range": 1.5, "camera.occlusion": occlusion, "radio.interval": 0.1}
+        carriers=2,
+        **{
+            "camera.range": 1.5,
+            "camera.occlusion": occlusion,
+            "camera.memory": 0.1,
+            "radio.interval": 0.1,
+        },
     )
     result = run_script(params, _shadow_scene(), 1, walk=(1.0, 0.0))
     assert result.final_state.seen_tick[0, 0].tolist() == [1 if seen else -1, 1]
@@ -91,7 +99,13 @@ def test_other_carriers_block_the_line_of_sight(occlusion, seen):
 @pytest.mark.parametrize(("occlusion", "seen"), [("carriers", True), ("carriers+robots", False)])
 def test_robots_block_the_line_of_sight_only_when_asked(occlusion, seen):
     params = split_params(
-        robots=2, **{"camera.range": 1.5, "camera.occlusion": occlusion, "radio.interval": 0.1}
+        robots=2,
+        **{
+            "camera.range": 1.5,
+            "camera.occlusion": occlusion,
+            "camera.memory": 0.1,
+            "radio.interval": 0.1,
+        },
     )
     scene = Scene.build(
         robots=[(1.4, 2.0), (0.9, 2.0)], carriers=[(0.3, 2.0)], urgency=[5], status=[IDLE]
@@ -109,7 +123,8 @@ def test_sighting_memory_keeps_a_carrier_a_candidate_after_it_left_the_view(memo
     params = split_params(**{"camera.range": 0.5, "camera.memory": memory, "radio.interval": 1.0})
     scene = Scene.build(robots=[(0.95, 2.0)], carriers=[(0.5, 2.0)], advert_phase=[0.45])
     result = run_script(params, scene, 6, walk=(1.0, 0.0))
-    assert result.final_state.seen_tick[0, 0, 0] == 2
+    # without memory nothing unheard is looked at; with it the last sighting is tick 2
+    assert result.final_state.seen_tick[0, 0, 0] == (2 if memory else -1)
     assert event_rows(result) == ([(5, "select", 0, 0)] if selected else [])
 
 
@@ -155,3 +170,35 @@ def test_a_correlated_walk_turns_every_interval_by_the_drawn_angle():
     expected = np.array([2.0, 2.0]) + 0.05 * np.array([2, 0]) + 0.05 * np.array([0, 3])
     expected += 0.05 * np.array([-2, 0])
     assert result.final_state.robot_pos[0, 0] == pytest.approx(expected, abs=1e-12)
+
+
+def test_without_memory_only_actionable_sightings_are_looked_at_and_choices_are_the_same():
+    # Restricting the camera to walking robots and carriers they heard AWAITING_PICKUP
+    # changes no candidate: the full line-of-sight computation gives the same ones.
+    from swarmtag.sim import RandomSource, seeded_state, step
+    from swarmtag.sim.sense import actionable, line_of_sight, sense
+
+    params = make_params(
+        load_profile("base").scenario(
+            {"perception": "split", "camera.range": 3.6, "camera.occlusion": "carriers+robots"}
+        ),
+        Urgency(alpha=3.0),
+    )
+    state = seeded_state(params, seed=3, runs=12)
+    source = RandomSource(params, seed=3, run_ids=state.run_ids)
+    compared = 0
+    for tick in range(1, 400):
+        inputs = source.inputs(tick)
+        senses = sense(state, inputs, params)
+        offset = state.carrier_pos[:, None, :, :] - state.robot_pos[:, :, None, :]
+        in_view = (
+            state.present[:, None, :]
+            & (state.carried_by < 0)[:, None, :]
+            & (np.sqrt((offset**2).sum(axis=-1)) <= params.camera_range)
+        )
+        full = line_of_sight(state, in_view, params)
+        relevant = actionable(state, senses.known_status)
+        assert np.array_equal(senses.known, full & relevant)
+        compared += int(relevant.sum())
+        state, _ = step(state, inputs, params)
+    assert compared > 300

@@ -14,6 +14,10 @@ the last status and urgency it heard per tag (its BLE cache). Two models:
   ``carriers+robots``, passes within a radius of another robot's centre).
   A sighting records the tick and the position seen (true position plus
   camera noise); the position is *known* while ``t - seen <= memory``.
+  Without memory, only what a robot can act on is looked at: robots that
+  were walking at the start of the tick, carriers they heard
+  AWAITING_PICKUP (nothing else can become a candidate, so the outcome is
+  the same and the costly line-of-sight tests are fewer).
 - **disc** (the model before profiles). Carrier c within
   ``detection_radius`` is seen and heard (unless lost), every tick.
 
@@ -30,9 +34,10 @@ from numpy.typing import NDArray
 from swarmtag.sim.geometry import Float, length, segment_crosses_box, segment_near_point
 from swarmtag.sim.params import Params
 from swarmtag.sim.randomness import TickInputs
-from swarmtag.sim.state import Int, WorldState
+from swarmtag.sim.state import Int, Mode, WorldState
+from swarmtag.tag import TagStatus
 
-__all__ = ["Senses", "advertised", "advertising", "line_of_sight", "sense"]
+__all__ = ["Senses", "actionable", "advertised", "advertising", "line_of_sight", "sense"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +83,16 @@ def advertising(phase: Int, tick: int, params: Params) -> NDArray[np.bool_]:
     return sent
 
 
+def actionable(state: WorldState, known_status: NDArray[np.int8]) -> NDArray[np.bool_]:
+    """(R, N, C): robots walking at the start of the tick and the carriers they heard awaiting.
+
+    Only these sightings can make a candidate when there is no sighting memory.
+    """
+    walking = (state.mode == Mode.WALK)[..., None]
+    awaiting: NDArray[np.bool_] = walking & (known_status == TagStatus.AWAITING_PICKUP)
+    return awaiting
+
+
 def line_of_sight(
     state: WorldState, visible: NDArray[np.bool_], params: Params
 ) -> NDArray[np.bool_]:
@@ -116,8 +131,6 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         heard = present & (distance <= params.radio_range)
         heard &= advertising(state.advert_phase, t, params)[:, None, :]
         visible = present & (state.carried_by < 0)[:, None, :] & (distance <= params.camera_range)
-        if params.occlusion:
-            visible = line_of_sight(state, visible, params)
     else:
         heard = visible = present & (distance <= params.detection_radius)
     if inputs.heard is not None:
@@ -125,6 +138,10 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     status, urgency = advertised(state, params)
     known_status = np.where(heard, status[:, None, :], state.known_status)
     known_urgency = np.where(heard, urgency[:, None, :], state.known_urgency)
+    if params.split and params.memory_ticks == 0:
+        visible = visible & actionable(state, known_status)
+    if params.split and params.occlusion:
+        visible = line_of_sight(state, visible, params)
 
     seen = state.carrier_pos[:, None, :, :]
     if inputs.noise is not None:
