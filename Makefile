@@ -15,13 +15,16 @@ $(STAMP): pyproject.toml
 
 DEMO_OUT ?= out/demo
 
-# The main job: proximity vs urgency(alpha=0.7), 40 runs of 3 robots / 7 carriers,
-# KPI table with CIs, event log, a snapshot and an animation of run 0 per condition;
-# then the quick reproduction of all five published studies and its HTML report.
+# The main job: the published baseline (proximity) against urgency-aware selection
+# (alpha = 0.7 and 9), 100 runs of 3 robots / 7 carriers on the calibrated paper-sim
+# profile: KPI table with CIs and p-values, the choice statistics under it, the event
+# log and event table, a snapshot and an animation of run 0 per condition; then the
+# quick reproduction of all five published studies and its HTML report.
 demo: $(STAMP)
 	mkdir -p $(DEMO_OUT)
-	$(BIN)/swarmtag simulate --runs 40 --condition proximity --condition urgency:alpha=0.7 \
-		--events $(DEMO_OUT)/events.csv --snapshot $(DEMO_OUT)/snapshot.png \
+	$(BIN)/swarmtag simulate --runs 100 --condition proximity --condition urgency:alpha=0.7 \
+		--condition urgency:alpha=9 --events $(DEMO_OUT)/events.csv \
+		--event-table $(DEMO_OUT)/event-table.csv --snapshot $(DEMO_OUT)/snapshot.png \
 		--animate $(DEMO_OUT)/run.gif
 	$(BIN)/swarmtag reproduce --quick --out $(DEMO_OUT)/reproduction
 

@@ -77,3 +77,20 @@ def test_the_default_world_is_the_default_profile():
     default = Scenario.default(robots=5, carriers=10)
     assert default == load_profile(DEFAULT_PROFILE).scenario({"robots": 5, "carriers": 10})
     assert Scenario.default(profile="base") == Scenario()
+
+
+def test_the_base_profile_reproduces_the_first_edition_results():
+    # docs/simulator.md, first edition: controller selection, proximity, 100 runs of seed 0
+    from swarmtag.analysis.kpis import condition_kpis, run_values
+    from swarmtag.analysis.runs import ConditionRuns
+    from swarmtag.policy import Proximity
+    from swarmtag.sim import simulate
+
+    result = simulate(Scenario.default(profile="base"), Proximity(), seed=0, runs=100)
+    kpis = condition_kpis(run_values(ConditionRuns.from_log(result.carriers, "proximity")))
+    assert kpis.p95_latency is not None
+    assert kpis.mean_latency is not None
+    assert kpis.throughput is not None
+    assert (round(kpis.p95_latency), round(kpis.mean_latency)) == (3295, 1899)
+    assert (round(kpis.throughput, 3), round(kpis.pa, 3)) == (1.367, 0.348)
+    assert kpis.undelivered == 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from PIL import Image
 
@@ -20,12 +21,13 @@ def traj():
     return result.trajectories
 
 
-def test_default_tick_shows_the_most_pursuits(traj):
+def test_default_tick_shows_the_most_carriers_being_pursued_or_carried(traj):
     tick = default_snapshot_tick(traj, 6)
-    modes = traj.robot_mode[1]
-    pursuing = ((modes == Mode.PREDOCK) | (modes == Mode.DOCK) | (modes == Mode.CENTRE)).sum(axis=1)
-    assert pursuing[tick] == pursuing.max()
-    assert pursuing.max() >= 1
+    modes, targets = traj.robot_mode[1], traj.robot_target[1]
+    busy = (modes >= Mode.PREDOCK) & (modes <= Mode.RELEASE) & (targets >= 0)
+    engaged = np.array([len(set(targets[t][busy[t]].tolist())) for t in range(len(modes))])
+    assert engaged[tick] == engaged.max() >= 2
+    assert tick == int(np.flatnonzero(engaged == engaged.max())[0])  # earliest on ties
 
 
 def test_snapshot_writes_a_png_at_the_asked_tick(traj, tmp_path):

@@ -36,6 +36,7 @@ __all__ = ["ANIMATION_FORMATS", "animate", "default_snapshot_tick", "snapshot"]
 
 ANIMATION_FORMATS: Final = (".gif", ".mp4")
 _PURSUING: Final = (Mode.PREDOCK, Mode.DOCK, Mode.CENTRE)
+_LOADED: Final = (Mode.LIFT, Mode.TRANSPORT, Mode.RELEASE)
 _PICKUP_COLOUR: Final = "#dbe9f6"
 _DROPOFF_COLOUR: Final = "#dff0d8"
 _ROBOT_COLOUR: Final = "tab:blue"
@@ -52,11 +53,21 @@ def _check_run(traj: Trajectories, run: int) -> int:
 
 
 def default_snapshot_tick(traj: Trajectories, run: int) -> int:
-    """The tick that shows most: most robots pursuing a carrier, earliest on ties."""
+    """The tick that shows most: most different carriers pursued or carried, earliest on ties.
+
+    Counting carriers rather than robots shows the swarm spread over its
+    work rather than the first tick, when all robots may head for one carrier.
+    """
     row = _check_run(traj, run)
     mode = traj.robot_mode[row]
-    pursuing = np.isin(mode, np.array(_PURSUING, dtype=mode.dtype)).sum(axis=1)
-    return int(traj.time[int(np.argmax(pursuing))])
+    target = traj.robot_target[row].astype(np.int64)
+    busy = np.isin(mode, np.array((*_PURSUING, *_LOADED), dtype=mode.dtype)) & (target >= 0)
+    carriers = traj.carrier_pos.shape[2]
+    engaged = np.zeros((mode.shape[0], carriers + 1), dtype=bool)
+    ticks = np.arange(mode.shape[0])[:, None]
+    engaged[ticks, np.where(busy, target, carriers)] = True
+    shown = engaged[:, :carriers].sum(axis=1)
+    return int(traj.time[int(np.argmax(shown))])
 
 
 def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
@@ -166,14 +177,18 @@ def animate(
     path: str | os.PathLike[str],
     *,
     run: int = 0,
-    every: int = 10,
+    every: int | None = None,
     fps: int = 10,
 ) -> int:
     """Write an animation of ``run`` (one frame every ``every`` ticks); return the frame count.
 
-    ``.gif`` uses Pillow (comes with matplotlib); ``.mp4`` needs an ffmpeg
-    executable, e.g. from ``pip install imageio-ffmpeg``.
+    ``every`` defaults to one frame per second of robot time (10 ticks of
+    0.1 s, 52 of the paper-sim profile's 0.01934 s). ``.gif`` uses Pillow
+    (comes with matplotlib); ``.mp4`` needs an ffmpeg executable, e.g. from
+    ``pip install imageio-ffmpeg``.
     """
+    if every is None:
+        every = max(1, round(1.0 / traj.geometry.tick_seconds))
     suffix = Path(path).suffix.lower()
     if suffix not in ANIMATION_FORMATS:
         msg = f"animation: {os.fspath(path)!r} must end in .gif or .mp4"
