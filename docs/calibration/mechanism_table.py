@@ -24,7 +24,9 @@ def _diff(data: dict, condition: str, metric: str) -> str:
         c for c in data["comparisons"] if c["condition"] == condition and c["metric"] == metric
     )
     digits = 3 if metric == "pa" else 0
-    return f"{row['diff']:+.{digits}f} (p {row['p_bootstrap']:.3g})"
+    p = row["p_bootstrap"]
+    shown = "< 0.001" if p == 0 else f"{p:.2g}"  # 2000 resamples: none crossed zero
+    return f"{row['diff']:+.{digits}f} (p {shown})"
 
 
 def main() -> None:

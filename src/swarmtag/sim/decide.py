@@ -86,19 +86,24 @@ def _pursuit_checks(s: WorldState, params: Params, t: int, events: TickEvents) -
     to_walk(s, abandon | timeout)
 
 
-def _face(s: WorldState, carrier: Int, free: NDArray[np.bool_], params: Params) -> Int:
-    """The face each robot docks at on ``carrier`` (R, N): nearest free, avoiding taken ones."""
-    centre = at_robots(s.carrier_pos, carrier)
-    face = nearest_free_face(s.robot_pos, centre, free, params.predock_offset)
-    if not params.avoid_taken_faces:
-        return face
-    taken = taken_faces(
+def _taken(s: WorldState, centre: Float, params: Params) -> NDArray[np.bool_]:
+    """(R, N, 4): the predock points of each robot's carrier it sees another robot stand on."""
+    return taken_faces(
         s.robot_pos,
         centre,
         params.predock_offset,
         body=2 * params.robot_radius,
         sight=params.detection_radius,
     )
+
+
+def _face(s: WorldState, carrier: Int, free: NDArray[np.bool_], params: Params) -> Int:
+    """The face each robot docks at on ``carrier`` (R, N): nearest free, avoiding taken ones."""
+    centre = at_robots(s.carrier_pos, carrier)
+    face = nearest_free_face(s.robot_pos, centre, free, params.predock_offset)
+    if not params.avoid_taken_faces:
+        return face
+    taken = _taken(s, centre, params)
     open_face = nearest_free_face(s.robot_pos, centre, free & ~taken, params.predock_offset)
     return np.where(open_face >= 0, open_face, face)
 
@@ -109,13 +114,7 @@ def _switch_taken_faces(s: WorldState, params: Params) -> None:
     if not (params.avoid_taken_faces and approaching.any()):
         return
     centre = at_robots(s.carrier_pos, s.target)
-    taken = taken_faces(
-        s.robot_pos,
-        centre,
-        params.predock_offset,
-        body=2 * params.robot_radius,
-        sight=params.detection_radius,
-    )
+    taken = _taken(s, centre, params)
     rows, robots = grid(*s.mode.shape)
     mine = taken[rows, robots, np.maximum(s.face, 0)]
     switch = approaching & mine
