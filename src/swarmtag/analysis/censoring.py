@@ -26,6 +26,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag.analysis.latency import SortedLatencies
 from swarmtag.analysis.runs import ConditionRuns
 
 __all__ = [
@@ -75,29 +76,20 @@ def run_ends(runs: ConditionRuns) -> tuple[NDArray[np.float64], NDArray[np.bool_
 
 
 @dataclass(frozen=True, eq=False)
-class CensoredLatencies:
-    """Every carrier's latency or censoring value, pooled and sorted ascending, with its run."""
+class CensoredLatencies(SortedLatencies):
+    """Every carrier's latency or censoring value, pooled and sorted ascending, with its run.
 
-    values: NDArray[np.float64]
-    """Latency if delivered, else run end - order time; ascending."""
+    ``values`` holds the latency if delivered, else run end - order time;
+    ``per_run`` counts carriers (values) per run; ``run_starts`` and
+    ``by_run`` are those of ``SortedLatencies``.
+    """
+
     observed: NDArray[np.bool_]
     """True where the value is a delivery (an event), False where it is censored."""
-    runs: NDArray[np.intp]
-    per_run: NDArray[np.int64]
-    """Carriers (values) in each run."""
     run_end: NDArray[np.float64]
     """The end of observation used for each run."""
     run_end_recorded: NDArray[np.bool_]
     """Whether each run's end came from the log's ``run_end`` (else the fallback)."""
-
-    @property
-    def run_starts(self) -> NDArray[np.int64]:
-        """Start of each run's block once values are sorted by (run, value)."""
-        return (np.cumsum(self.per_run) - self.per_run).astype(np.int64)
-
-    def by_run(self) -> NDArray[np.float64]:
-        """The values sorted by run first, then by value (blocks of ``per_run``)."""
-        return self.values[np.lexsort((self.values, self.runs))]
 
 
 def censored_latencies(runs: ConditionRuns) -> CensoredLatencies:

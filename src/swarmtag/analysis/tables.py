@@ -33,6 +33,7 @@ __all__ = [
     "html_tables",
     "latex_tables",
     "markdown_tables",
+    "metric_cells",
     "metric_label",
     "relative_change",
     "scalability_html",
@@ -123,8 +124,9 @@ def flagged(comparison: Comparison) -> bool:
     return comparison.undelivered_differs and comparison.metric in DELIVERED_LATENCY_METRICS
 
 
-def _value_row(report: MetricsReport, metric: str) -> list[str]:
-    cells = [metric_label(metric, report.time_unit)]
+def metric_cells(report: MetricsReport, metric: str) -> list[str]:
+    """One cell per condition: ``value [low, high]``, or ``-`` where it has no such metric."""
+    cells = []
     for c in report.conditions:
         if metric not in c.metrics:
             cells.append("-")  # PA at delivery of a condition whose log lacks urgency_end
@@ -133,6 +135,10 @@ def _value_row(report: MetricsReport, metric: str) -> list[str]:
         interval = estimate.confidence_interval
         cells.append(format_interval(estimate.value, interval.low, interval.high))
     return cells
+
+
+def _value_row(report: MetricsReport, metric: str) -> list[str]:
+    return [metric_label(metric, report.time_unit), *metric_cells(report, metric)]
 
 
 def _rows(report: MetricsReport) -> tuple[list[str], list[list[str]], list[str], list[list[str]]]:

@@ -39,6 +39,7 @@ from swarmtag.analysis.tables import (
     html_tables,
     latex_tables,
     markdown_tables,
+    metric_cells,
     metric_label,
     unit_word,
 )
@@ -61,18 +62,6 @@ def _time_note(time_unit: str | None) -> str:
     )
 
 
-def _metric_cells(report: MetricsReport, metric: str) -> list[str]:
-    cells = []
-    for statistics in report.conditions:
-        if metric not in statistics.metrics:
-            cells.append("-")  # PA at delivery of a condition whose log lacks urgency_end
-            continue
-        estimate = statistics.estimate(metric)
-        interval = estimate.confidence_interval
-        cells.append(format_interval(estimate.value, interval.low, interval.high))
-    return cells
-
-
 def render_report(report: MetricsReport, console: Console) -> None:
     """The KPI table, the difference table and the notes of a report, on ``console``."""
     level = f"{report.confidence_level * 100:g} %"
@@ -82,12 +71,12 @@ def render_report(report: MetricsReport, console: Console) -> None:
         kpis.add_column(statistics.condition, justify="right")
     kpis.add_row("Runs", *(str(s.kpis.runs) for s in report.conditions))
     for metric in CORE_METRICS:
-        kpis.add_row(metric_label(metric, report.time_unit), *_metric_cells(report, metric))
+        kpis.add_row(metric_label(metric, report.time_unit), *metric_cells(report, metric))
     kpis.add_row("Total deliveries", *(str(s.kpis.total_deliveries) for s in report.conditions))
     kpis.add_row("Undelivered carriers", *(str(s.kpis.undelivered) for s in report.conditions))
     optional = [m for m in OPTIONAL_METRICS if any(m in s.metrics for s in report.conditions)]
     for metric in (*CENSORED_METRICS, *optional):
-        kpis.add_row(metric_label(metric, report.time_unit), *_metric_cells(report, metric))
+        kpis.add_row(metric_label(metric, report.time_unit), *metric_cells(report, metric))
     console.print(kpis)
 
     if report.comparisons:
