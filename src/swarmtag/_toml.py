@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import os
 import tomllib
-from pathlib import Path
 from typing import Any
 
+from swarmtag._inputs import regular_file
 from swarmtag.errors import SwarmtagError
 
 __all__ = ["read_toml"]
@@ -21,7 +21,7 @@ def read_toml(
     """
     name = os.fspath(path)
     try:
-        with Path(path).open("rb") as handle:
+        with regular_file(path, what=what, error=error).open("rb") as handle:
             return tomllib.load(handle)
     except FileNotFoundError:
         msg = f"{name}: no such {what}"

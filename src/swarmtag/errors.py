@@ -19,7 +19,8 @@ what to do instead.
     │   ├── WrongTarget                     the write names another tag
     │   ├── ReplayedWrite                   counter not above the writer's highest seen
     │   ├── RoleNotAllowed                  that role may not change that field
-    │   └── IllegalTransition               that role may not make that status change
+    │   ├── IllegalTransition               that role may not make that status change
+    │   └── WriterTableFull                 the tag already tracks as many writers as it can
     ├── StateRecordError (ValueError)       a persisted tag record is corrupt or unknown
     ├── PolicyError (ValueError)            bad policy parameter, condition name or inputs
     ├── EventLogError (ValueError)          an event log breaks the schema (names file, row, column)
@@ -30,7 +31,9 @@ what to do instead.
     │   └── DeterminismError                a run differed between two ways of computing it
     ├── StudyError (ValueError)             a study file or option is not allowed (names the key)
     ├── CalibrationError (ValueError)       a calibration baseline, free parameter or option refused
-    └── StoreError (RuntimeError)           the results store cannot be opened or is inconsistent
+    ├── StoreError (RuntimeError)           the results store cannot be opened or is inconsistent
+    ├── OutputError (ValueError)            an output path is refused (names the option and path)
+    └── ResourceError (ValueError)          the work asked for cannot fit (says estimate and limit)
 """
 
 from __future__ import annotations
@@ -46,10 +49,12 @@ __all__ = [
     "IllegalTransition",
     "InvariantError",
     "MalformedWrite",
+    "OutputError",
     "PayloadError",
     "PayloadLengthError",
     "PolicyError",
     "ReplayedWrite",
+    "ResourceError",
     "RoleNotAllowed",
     "SimulationError",
     "StateRecordError",
@@ -60,6 +65,7 @@ __all__ = [
     "UnknownStatusError",
     "UrgencyRangeError",
     "WriteRejected",
+    "WriterTableFull",
     "WrongTarget",
 ]
 
@@ -141,6 +147,12 @@ class IllegalTransition(WriteRejected):
     att_error = 0x84
 
 
+class WriterTableFull(WriteRejected):
+    """The tag already tracks its maximum number of writer ids and refuses a new one."""
+
+    att_error = 0x85
+
+
 class StateRecordError(SwarmtagError, ValueError):
     """A persisted tag state record is corrupt, truncated or of an unknown version."""
 
@@ -183,3 +195,11 @@ class CalibrationError(SwarmtagError, ValueError):
 
 class StoreError(SwarmtagError, RuntimeError):
     """The results store cannot be opened, or holds rows that contradict its own keys."""
+
+
+class OutputError(SwarmtagError, ValueError):
+    """An output path is refused before any work: no folder, a folder, unwritable, or twice."""
+
+
+class ResourceError(SwarmtagError, ValueError):
+    """The work asked for cannot fit this machine; the message gives the estimate and the limit."""

@@ -17,9 +17,9 @@ from collections.abc import Iterable, Mapping
 from dataclasses import asdict, fields
 from typing import Any, Final
 
+from swarmtag._checks import check_int
 from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError
-from swarmtag.sim._fields import check_int
 from swarmtag.sim.groups import (
     LAB_CARRIERS,
     Arena,

@@ -10,14 +10,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Final
 
-from swarmtag.errors import ConfigError
-from swarmtag.sim._fields import (
+from swarmtag._checks import (
     check_bool,
     check_choice,
     check_int,
     check_number,
     check_probability,
 )
+from swarmtag.errors import ConfigError
 
 __all__ = [
     "LAB_CARRIERS",

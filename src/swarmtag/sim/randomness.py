@@ -38,8 +38,8 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmtag._checks import check_int
 from swarmtag.errors import ConfigError
-from swarmtag.sim._fields import check_int
 from swarmtag.sim.geometry import Float, length
 from swarmtag.sim.params import Params
 

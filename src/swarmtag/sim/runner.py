@@ -14,10 +14,10 @@ from typing import Protocol
 
 import numpy as np
 
+from swarmtag._checks import check_int
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable
 from swarmtag.policy import Policy
-from swarmtag.sim._fields import check_int
 from swarmtag.sim.events import EventKind, EventRecorder
 from swarmtag.sim.invariants import check_tick
 from swarmtag.sim.kernel import step

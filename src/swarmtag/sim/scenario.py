@@ -21,8 +21,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any, Final
 
+from swarmtag._checks import check_choice, check_int, check_number
 from swarmtag.errors import ConfigError
-from swarmtag.sim._fields import check_choice, check_int, check_number
 from swarmtag.sim._mapping import load_toml, scenario_fields, scenario_to_mapping
 from swarmtag.sim.groups import (
     Arena,

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Final
 
-from swarmtag.sim._fields import check_choice, check_number
+from swarmtag._checks import check_choice, check_number
 
 __all__ = ["OCCLUSION_MODELS", "PERCEPTION_MODELS", "Camera", "Radio"]
 

@@ -1,19 +1,36 @@
-"""Checks for scenario fields: every refusal is a ``ConfigError`` naming the field and its range.
+"""The one place where option and file values are range-checked; each refusal names the field.
 
-Configuration arrives from TOML files, command-line flags and scripts, so
-values are checked at run time rather than trusted to annotations: integers
-must be integers (``3.0`` is refused, ``True`` is not a number), numbers may
-be written as integers, and every message says what was allowed.
+Values arrive from TOML files, command-line flags and scripts, so they are
+checked at run time rather than trusted to annotations: integers must be
+integers (``3.0`` is refused, ``True`` is not a number), numbers may be
+written as integers, every number must be finite, and every message says
+what was allowed. The error class defaults to ``ConfigError`` (scenario
+fields); studies, calibration and the CLI pass their own. The limits shared
+by every surface (seeds, run indices) live here too.
 """
 
 from __future__ import annotations
 
 import math
 from numbers import Integral, Real
+from typing import Final
 
-from swarmtag.errors import ConfigError
+from swarmtag.errors import ConfigError, SwarmtagError
 
-__all__ = ["check_bool", "check_choice", "check_int", "check_number", "check_probability"]
+__all__ = [
+    "MAX_RUN_INDEX",
+    "MAX_SEED",
+    "check_bool",
+    "check_choice",
+    "check_int",
+    "check_number",
+    "check_probability",
+]
+
+MAX_SEED: Final = 2**63 - 1
+"""Largest master seed: a seed is stored as a signed 64-bit integer (results store, logs)."""
+MAX_RUN_INDEX: Final = 2**53
+"""Largest global run index (run offset plus runs): run ids stay exact in float64 columns."""
 
 
 def _describe_number(low: float | None, high: float | None, *, low_open: bool) -> str:
@@ -32,6 +49,7 @@ def check_number(
     low: float | None = None,
     high: float | None = None,
     low_open: bool = False,
+    error: type[SwarmtagError] = ConfigError,
 ) -> float:
     """``value`` as a float if it is a finite real in the range, else ``ConfigError``.
 
@@ -45,7 +63,7 @@ def check_number(
     allowed = _describe_number(low, high, low_open=low_open)
     if isinstance(value, bool) or not isinstance(value, Real):
         msg = f"{name}: {value!r} is not {allowed}"
-        raise ConfigError(msg)
+        raise error(msg)
     number = float(value)
     ok = math.isfinite(number)
     if ok and low is not None:
@@ -54,11 +72,13 @@ def check_number(
         ok = number <= high
     if not ok:
         msg = f"{name}: {value!r} is not {allowed}"
-        raise ConfigError(msg)
+        raise error(msg)
     return number + 0.0  # -0.0 becomes 0.0
 
 
-def check_probability(name: str, value: object) -> float:
+def check_probability(
+    name: str, value: object, *, error: type[SwarmtagError] = ConfigError
+) -> float:
     """A probability in [0, 1].
 
     >>> check_probability("realism.breakdown", 1.5)
@@ -66,10 +86,17 @@ def check_probability(name: str, value: object) -> float:
     ...
     swarmtag.errors.ConfigError: realism.breakdown: 1.5 is not a number in [0, 1]
     """
-    return check_number(name, value, low=0.0, high=1.0)
+    return check_number(name, value, low=0.0, high=1.0, error=error)
 
 
-def check_int(name: str, value: object, *, low: int, high: int | None = None) -> int:
+def check_int(
+    name: str,
+    value: object,
+    *,
+    low: int,
+    high: int | None = None,
+    error: type[SwarmtagError] = ConfigError,
+) -> int:
     """``value`` as an int if it is an integer in ``low..high``, else ``ConfigError``.
 
     >>> check_int("robots", 0, low=1)
@@ -80,15 +107,21 @@ def check_int(name: str, value: object, *, low: int, high: int | None = None) ->
     allowed = f"an integer >= {low}" if high is None else f"an integer in {low}-{high}"
     if isinstance(value, bool) or not isinstance(value, Integral):
         msg = f"{name}: {value!r} is not {allowed}"
-        raise ConfigError(msg)
+        raise error(msg)
     number = int(value)
     if number < low or (high is not None and number > high):
         msg = f"{name}: {value!r} is not {allowed}"
-        raise ConfigError(msg)
+        raise error(msg)
     return number
 
 
-def check_choice(name: str, value: object, choices: tuple[str, ...]) -> str:
+def check_choice(
+    name: str,
+    value: object,
+    choices: tuple[str, ...],
+    *,
+    error: type[SwarmtagError] = ConfigError,
+) -> str:
     """``value`` if it is one of ``choices`` (case-insensitive), in its canonical spelling.
 
     >>> check_choice("urgency.model", "Static", ("growing", "static"))
@@ -97,10 +130,10 @@ def check_choice(name: str, value: object, choices: tuple[str, ...]) -> str:
     if isinstance(value, str) and value.strip().lower() in choices:
         return value.strip().lower()
     msg = f"{name}: {value!r} is not one of {', '.join(choices)}"
-    raise ConfigError(msg)
+    raise error(msg)
 
 
-def check_bool(name: str, value: object) -> bool:
+def check_bool(name: str, value: object, *, error: type[SwarmtagError] = ConfigError) -> bool:
     """``value`` if it is a boolean (TOML ``true``/``false``), else ``ConfigError``.
 
     >>> check_bool("motion.avoid_taken_faces", 1)
@@ -111,4 +144,4 @@ def check_bool(name: str, value: object) -> bool:
     if isinstance(value, bool):
         return value
     msg = f"{name}: {value!r} is not true or false"
-    raise ConfigError(msg)
+    raise error(msg)
