@@ -9,6 +9,8 @@ from hypothesis import strategies as st
 
 from swarmtag.errors import EventLogError
 from swarmtag.io import (
+    MAX_EVENT_TIME,
+    MIN_NONZERO_TIME,
     CarrierLog,
     EventTable,
     format_csv,
@@ -116,8 +118,13 @@ def test_messages_name_file_line_and_column(old, new, message):
 
 
 def test_line_numbers_count_blank_rows_and_quoted_newlines():
-    # Lines: 1 header, 2-3 data, 4 blank, 5-6 one row whose condition spans two lines, 7 data.
-    text = GOOD.replace("\nproximity,1,", '\n\n"multi\nline",1,') + "proximity,2,7,3,2,0,,,\n"
+    # Lines: 1 header, 2-3 data, 4 blank, 5-6 one row whose notes cell spans two lines, 7 data.
+    text = (
+        GOOD.replace(HEADER, HEADER + ",notes")
+        .replace("\nproximity,1,", "\n\nproximity,1,")
+        .replace("41.5,0\n", '41.5,0,"multi\nline"\n')
+        + "proximity,2,7,3,2,0,,,,\n"
+    )
     with pytest.raises(EventLogError, match=r"^line 5, column robot: 'x' is not an integer"):
         parse_carrier_csv(text.replace("41.5,0", "41.5,x"))
     with pytest.raises(EventLogError, match=r"^line 7, column urgency0: 12 is not an integer"):
@@ -164,7 +171,7 @@ def test_canonical_format_is_fixed():
 
 
 def test_floats_are_written_as_repr():
-    values = [0.1, 1e-05, 1e16, 2.5e-300, 123456789.123, -0.0]
+    values = [0.1, 1e-05, 1e11, 2.5e-09, 123456789.123, -0.0]
     log = CarrierLog(
         condition=["c"] * 6,
         run=range(6),
@@ -190,9 +197,15 @@ def test_round_trip_is_exact_and_bytes_are_stable(log):
 
 
 @given(
-    st.lists(st.floats(allow_nan=False, allow_infinity=False, width=64), min_size=1, max_size=20)
+    st.lists(
+        st.floats(-MAX_EVENT_TIME, MAX_EVENT_TIME).filter(
+            lambda v: v == 0 or abs(v) >= MIN_NONZERO_TIME
+        ),
+        min_size=1,
+        max_size=20,
+    )
 )
-def test_any_float_survives_a_round_trip(values):
+def test_any_allowed_time_survives_a_round_trip(values):
     n = len(values)
     log = CarrierLog(
         condition=["c"] * n,
@@ -223,7 +236,7 @@ def test_files(tmp_path):
 def test_file_problems(tmp_path):
     with pytest.raises(EventLogError, match=r"missing\.csv: no such file"):
         read_carrier_csv(tmp_path / "missing.csv")
-    with pytest.raises(EventLogError, match="is a directory"):
+    with pytest.raises(EventLogError, match="is a folder, not a CSV event log"):
         read_carrier_csv(tmp_path)
     latin = tmp_path / "latin.csv"
     latin.write_bytes(GOOD.replace("proximity", "proximit\xe9").encode("latin-1"))

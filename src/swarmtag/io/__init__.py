@@ -4,7 +4,9 @@
 per carrier per run); ``EventTable`` is the optional long-format table of
 everything else that happened. Both read and write CSV (standard library) and
 Parquet (the ``parquet`` extra); ``read_event_log`` picks by file extension.
-Every refusal is an ``EventLogError`` naming the file, row and column.
+Every refusal is an ``EventLogError`` naming the file, row and column; what is
+accepted is listed in ``swarmtag.io.schema`` (values) and
+``swarmtag.io.validation`` (files and CSV cells).
 """
 
 from __future__ import annotations
@@ -23,7 +25,11 @@ from swarmtag.io.schema import (
     CARRIER_OPTIONAL,
     CARRIER_SCHEMA,
     EVENT_SCHEMA,
+    MAX_EVENT_TIME,
+    MAX_EVENT_VALUE,
+    MIN_NONZERO_TIME,
     MISSING_ID,
+    TIME_COLUMNS,
     TIME_UNIT_COLUMN,
     TIME_UNITS,
     ColumnSpec,
@@ -35,7 +41,11 @@ __all__ = [
     "CARRIER_OPTIONAL",
     "CARRIER_SCHEMA",
     "EVENT_SCHEMA",
+    "MAX_EVENT_TIME",
+    "MAX_EVENT_VALUE",
+    "MIN_NONZERO_TIME",
     "MISSING_ID",
+    "TIME_COLUMNS",
     "TIME_UNITS",
     "TIME_UNIT_COLUMN",
     "CarrierLog",

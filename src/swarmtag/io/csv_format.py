@@ -4,7 +4,8 @@ Reading tolerates a UTF-8 byte-order mark, CRLF line endings, white space
 around cells and header names, header names in any case, blank rows,
 semicolon- or tab-separated files, and extra columns (ignored). Messages name
 the file, the line of the file (the header is line 1, so this is the row
-number a spreadsheet shows) and the column.
+number a spreadsheet shows) and the column. What a number cell may look like,
+and what else is refused (NUL bytes, FIFOs), is in ``swarmtag.io.validation``.
 
 Writing is canonical, so identical tables give byte-identical files: UTF-8
 without a byte-order mark, LF line endings, comma-separated, the schema's
@@ -22,7 +23,6 @@ import io
 import math
 import os
 from collections.abc import Iterable, Sequence
-from pathlib import Path
 from typing import TypeVar
 
 import numpy as np
@@ -37,11 +37,17 @@ from swarmtag.io.schema import (
     ColumnSpec,
     Kind,
     RowLocator,
-    finish_float,
-    finish_int,
     finish_text,
+    shown,
 )
 from swarmtag.io.tables import CarrierLog, EventTable, _Columns
+from swarmtag.io.validation import (
+    check_no_nul,
+    input_file,
+    parse_float_cells,
+    parse_int_cells,
+    reading,
+)
 
 __all__ = [
     "format_csv",
@@ -56,58 +62,6 @@ _TableT = TypeVar("_TableT", bound=_Columns)
 _DELIMITERS = (",", ";", "\t")
 
 
-def _parse_int_text(text: str) -> int | None:
-    """Python's reading of an integer cell; ``3.0`` counts as 3. ``None`` if not an integer."""
-    try:
-        return int(text)
-    except ValueError:
-        pass
-    try:
-        number = float(text)
-    except ValueError:
-        return None
-    return int(number) if number.is_integer() else None
-
-
-def _parse_ints(
-    spec: ColumnSpec, cells: NDArray[np.str_], present: NDArray[np.bool_], loc: RowLocator
-) -> NDArray[np.int64]:
-    values = np.zeros(cells.shape, dtype=np.int64)
-    try:
-        values[present] = cells[present].astype(np.int64)
-    except (ValueError, OverflowError):
-        # The slow path finds the offending cell, and accepts what only Python reads ("3.0").
-        for index in np.flatnonzero(present).tolist():
-            text = str(cells[index])
-            number = _parse_int_text(text)
-            if number is None:
-                raise loc.error(index, spec.name, f"{text!r} is not an integer") from None
-            if not -(2**63) <= number < 2**63:
-                raise loc.error(index, spec.name, f"{text!r} is too large") from None
-            values[index] = number
-    return finish_int(spec, values, present, loc)
-
-
-def _parse_floats(
-    spec: ColumnSpec, cells: NDArray[np.str_], present: NDArray[np.bool_], loc: RowLocator
-) -> NDArray[np.float64]:
-    values = np.full(cells.shape, np.nan)
-    try:
-        values[present] = cells[present].astype(np.float64)
-    except ValueError:
-        for index in np.flatnonzero(present).tolist():
-            text = str(cells[index])
-            try:
-                values[index] = float(text)
-            except ValueError:
-                raise loc.error(index, spec.name, f"{text!r} is not a number") from None
-    bad = np.flatnonzero(present & ~np.isfinite(values))
-    if bad.size:
-        index = int(bad[0])
-        raise loc.error(index, spec.name, f"{str(cells[index])!r} is not a finite number")
-    return finish_float(spec, values, present, loc)
-
-
 def _parse_column(
     spec: ColumnSpec, cells: NDArray[np.str_], loc: RowLocator
 ) -> NDArray[np.generic]:
@@ -115,8 +69,8 @@ def _parse_column(
     if spec.kind is Kind.TEXT:
         return finish_text(spec, cells, loc)
     if spec.kind is Kind.INT:
-        return _parse_ints(spec, cells, present, loc)
-    return _parse_floats(spec, cells, present, loc)
+        return parse_int_cells(spec, cells, present, loc)
+    return parse_float_cells(spec, cells, present, loc)
 
 
 def _parse_time_unit(cells: NDArray[np.str_], loc: RowLocator) -> str | None:
@@ -131,7 +85,7 @@ def _parse_time_unit(cells: NDArray[np.str_], loc: RowLocator) -> str | None:
         raise loc.error(
             first,
             TIME_UNIT_COLUMN,
-            f"{str(cells[first])!r} is not tick or s (simulator ticks or seconds)",
+            f"{shown(str(cells[first]))} is not tick or s (simulator ticks or seconds)",
         )
     differ = stated[units[stated] != unit]
     if differ.size:
@@ -139,7 +93,7 @@ def _parse_time_unit(cells: NDArray[np.str_], loc: RowLocator) -> str | None:
         raise loc.error(
             index,
             TIME_UNIT_COLUMN,
-            f"{str(cells[index])!r} differs from {unit!r} on {loc.where(first)}; "
+            f"{shown(str(cells[index]))} differs from {unit!r} on {loc.where(first)}; "
             "a log has one time unit",
         )
     return unit
@@ -180,6 +134,10 @@ def _rows(text: str, loc: RowLocator) -> tuple[list[str], int, list[list[str]], 
 def _parse_table(text: str, table: type[_TableT], source: str | None) -> _TableT:
     loc = RowLocator(source=source)
     header, header_line, rows, line_numbers = _rows(text, loc)
+    if "\x00" in text:
+        check_no_nul(
+            header, header_line, rows, RowLocator(source=source, lines=np.asarray(line_numbers))
+        )
     named = [name for name in header if name]
     repeated = sorted({name for name in named if named.count(name) > 1})
     if repeated:
@@ -220,20 +178,20 @@ def _parse_table(text: str, table: type[_TableT], source: str | None) -> _TableT
     return table._build(columns, time_unit, loc)
 
 
-def _read_text(path: str | os.PathLike[str]) -> str:
-    try:
-        with Path(path).open(encoding="utf-8-sig", newline="") as handle:
-            return handle.read()
-    except FileNotFoundError:
-        raise EventLogError(f"{os.fspath(path)}: no such file") from None
-    except IsADirectoryError:
-        raise EventLogError(f"{os.fspath(path)}: is a directory, not an event log") from None
-    except UnicodeDecodeError as error:
-        raise EventLogError(
-            f"{os.fspath(path)}: not UTF-8 text (byte {error.start}); save the file as CSV UTF-8"
-        ) from None
-    except OSError as error:
-        raise EventLogError(f"{os.fspath(path)}: cannot read ({error.strerror})") from None
+def _read_text(path: str | os.PathLike[str], what: str) -> str:
+    """The file's text; a FIFO, a folder or a device is refused before it is opened."""
+    checked = input_file(path, what)
+    name = os.fspath(path)
+    with reading(name):
+        try:
+            with checked.open(encoding="utf-8-sig", newline="") as handle:
+                return handle.read()
+        except UnicodeDecodeError as error:
+            raise EventLogError(
+                f"{name}: not UTF-8 text (byte {error.start}); save the file as CSV UTF-8"
+            ) from None
+        except OSError as error:
+            raise EventLogError(f"{name}: cannot read ({error.strerror})") from None
 
 
 def parse_carrier_csv(text: str, *, source: str | None = None) -> CarrierLog:
@@ -250,22 +208,24 @@ def parse_carrier_csv(text: str, *, source: str | None = None) -> CarrierLog:
     ...
     swarmtag.errors.EventLogError: events.csv: line 2, column delivery_time: 'abc' is not a number
     """
-    return _parse_table(text.removeprefix("\ufeff"), CarrierLog, source)
+    with reading(source):
+        return _parse_table(text.removeprefix("\ufeff"), CarrierLog, source)
 
 
 def parse_event_csv(text: str, *, source: str | None = None) -> EventTable:
     """Read a long-format event table from CSV text; ``source`` names it in messages."""
-    return _parse_table(text.removeprefix("\ufeff"), EventTable, source)
+    with reading(source):
+        return _parse_table(text.removeprefix("\ufeff"), EventTable, source)
 
 
 def read_carrier_csv(path: str | os.PathLike[str]) -> CarrierLog:
     """Read a per-carrier event log from a CSV file."""
-    return parse_carrier_csv(_read_text(path), source=os.fspath(path))
+    return parse_carrier_csv(_read_text(path, "CSV event log"), source=os.fspath(path))
 
 
 def read_event_csv(path: str | os.PathLike[str]) -> EventTable:
     """Read a long-format event table from a CSV file."""
-    return parse_event_csv(_read_text(path), source=os.fspath(path))
+    return parse_event_csv(_read_text(path, "CSV event table"), source=os.fspath(path))
 
 
 def _format_column(spec: ColumnSpec, column: NDArray[np.generic]) -> list[str]:

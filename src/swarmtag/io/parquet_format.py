@@ -8,13 +8,15 @@ and a ``time_unit`` string column when the table states one. Reading accepts
 any integer or floating column type (integral floats for integer columns, as
 pandas writes them), nulls or NaN for empty cells, optional columns when
 present, and ignores extra columns. Messages name the file, the 1-based data row and the column.
+Values meet the same rules as CSV cells (ranges, finite times, text without
+control characters); a corrupt or non-Parquet file, or a FIFO or folder, is
+one ``EventLogError`` line (``swarmtag.io.validation``).
 """
 
 from __future__ import annotations
 
 import importlib
 import os
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
@@ -23,17 +25,22 @@ from numpy.typing import NDArray
 from swarmtag._atomic import atomic_path
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
+    INT64_MAX,
     MISSING_ID,
     TIME_UNIT_COLUMN,
     TIME_UNITS,
     ColumnSpec,
     Kind,
     RowLocator,
+    check_text_cells,
     finish_float,
     finish_int,
     finish_text,
+    shown,
+    too_large,
 )
 from swarmtag.io.tables import CarrierLog, EventTable, _Columns
+from swarmtag.io.validation import input_file, reading
 
 if TYPE_CHECKING:
     from types import ModuleType
@@ -69,8 +76,9 @@ def _column(
     if spec.kind is Kind.TEXT:
         if not (pa.types.is_string(kind) or pa.types.is_large_string(kind)):
             raise loc.table_error(f"column {spec.name} has type {kind}; expected text")
-        cells = np.array(["" if v is None else v.strip() for v in column.to_pylist()], dtype=str)
-        return finish_text(spec, cells, loc)
+        texts = ["" if v is None else v.strip() for v in column.to_pylist()]
+        check_text_cells(spec, texts, loc)  # before numpy drops trailing NUL characters
+        return finish_text(spec, np.array(texts, dtype=str), loc)
     numeric = pa.types.is_integer(kind) or pa.types.is_floating(kind)
     if not numeric:
         raise loc.table_error(f"column {spec.name} has type {kind}; expected {spec.kind.value}")
@@ -81,30 +89,51 @@ def _column(
         return finish_float(spec, values, present, loc)
     if raw.dtype.kind == "f":
         present &= ~np.isnan(raw)
-        integral = np.isfinite(raw) & (raw == np.round(raw)) & (np.abs(raw) < 2.0**63)
+        integral = np.isfinite(raw) & (raw == np.round(raw))
         bad = np.flatnonzero(present & ~integral)
         if bad.size:
             index = int(bad[0])
             raise loc.error(index, spec.name, f"{float(raw[index])!r} is not an integer")
+        bad = np.flatnonzero(present & (np.abs(raw) >= 2.0**63))
+        if bad.size:
+            index = int(bad[0])
+            raise loc.error(index, spec.name, too_large(spec, repr(float(raw[index]))))
         raw = np.where(present, raw, 0)
     elif raw.dtype.kind == "u":
-        bad = np.flatnonzero(raw > np.iinfo(np.int64).max)
+        bad = np.flatnonzero(raw > INT64_MAX)
         if bad.size:
-            raise loc.error(int(bad[0]), spec.name, f"{int(raw[bad[0]])} is too large")
+            raise loc.error(int(bad[0]), spec.name, too_large(spec, str(int(raw[bad[0]]))))
     return finish_int(spec, raw.astype(np.int64), present, loc)
 
 
-def _read(path: str | os.PathLike[str], table: type[_TableT]) -> _TableT:
+def _read(path: str | os.PathLike[str], table: type[_TableT], what: str) -> _TableT:
+    """Read and check a table; any failure is one ``EventLogError`` line naming the file."""
     pa, pq = _pyarrow()
     source = os.fspath(path)
-    loc = RowLocator(source=source)
-    if not Path(path).exists():
-        raise loc.table_error("no such file")
-    try:
-        data = pq.read_table(path)
-    except (OSError, pa.ArrowException) as error:
-        raise loc.table_error(f"not a readable Parquet file ({error})") from None
-    by_name = {name.strip().lower(): name for name in data.column_names}
+    checked = input_file(path, what)  # a FIFO or a folder is refused before it is opened
+    with reading(source, (pa.ArrowException,)):
+        try:
+            data = pq.read_table(checked)
+        except MemoryError:
+            raise
+        except (OSError, ValueError, pa.ArrowException) as error:
+            detail = (str(error).strip().splitlines() or [type(error).__name__])[0][:200]
+            raise EventLogError(f"{source}: not a readable Parquet file ({detail})") from None
+        return _columns(pa, data, table, RowLocator(source=source))
+
+
+def _columns(
+    pa: ModuleType,
+    data: Any,  # noqa: ANN401  # a pyarrow Table; pyarrow ships no stubs
+    table: type[_TableT],
+    loc: RowLocator,
+) -> _TableT:
+    """The checked table built from the columns of an Arrow table."""
+    names = [name.strip().lower() for name in data.column_names]
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise loc.table_error(f"names column {shown(repeated[0])} more than once")
+    by_name = dict(zip(names, data.column_names, strict=True))
     missing = [spec.name for spec in table.SCHEMA if spec.name not in by_name]
     if missing:
         raise loc.table_error(
@@ -122,24 +151,27 @@ def _read(path: str | os.PathLike[str], table: type[_TableT]) -> _TableT:
             str(v).strip().lower() for v in data.column(by_name[TIME_UNIT_COLUMN]).to_pylist() if v
         }
         if len(units) > 1:
-            listed = ", ".join(sorted(units))
+            listed = ", ".join(
+                unit if unit.isprintable() and len(unit) <= 10 else shown(unit)
+                for unit in sorted(units)
+            )
             raise loc.table_error(
                 f"column {TIME_UNIT_COLUMN} holds {listed}; a log has one time unit"
             )
         time_unit = units.pop() if units else None
         if time_unit is not None and time_unit not in TIME_UNITS:
-            raise loc.table_error(f"column {TIME_UNIT_COLUMN}: {time_unit!r} is not tick or s")
+            raise loc.table_error(f"column {TIME_UNIT_COLUMN}: {shown(time_unit)} is not tick or s")
     return table._build(columns, time_unit, loc)
 
 
 def read_carrier_parquet(path: str | os.PathLike[str]) -> CarrierLog:
     """Read a per-carrier event log from a Parquet file."""
-    return _read(path, CarrierLog)
+    return _read(path, CarrierLog, "Parquet event log")
 
 
 def read_event_parquet(path: str | os.PathLike[str]) -> EventTable:
     """Read a long-format event table from a Parquet file."""
-    return _read(path, EventTable)
+    return _read(path, EventTable, "Parquet event table")
 
 
 def write_parquet(table: CarrierLog | EventTable, path: str | os.PathLike[str]) -> None:

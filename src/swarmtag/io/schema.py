@@ -6,11 +6,19 @@ disagree. Messages name the file, the row and the column, and say what was
 expected. Rows are named ``line N`` for CSV files (the line of the file, the
 header being line 1, i.e. the row number a spreadsheet shows) and ``row N``
 otherwise (the 1-based data row, header not counted).
+
+Value rules every source meets (CSV, Parquet, in memory): integers fit the
+column's range (at most int64); times are finite and lie in
+``[0, MAX_EVENT_TIME]`` (``order_time``: ``[-MAX_EVENT_TIME, MAX_EVENT_TIME]``,
+as SPEC §8.1 lets an order precede the run start) and are 0 or at least
+``MIN_NONZERO_TIME`` away from it; other numbers lie within
+``MAX_EVENT_VALUE`` of 0; text has no control characters.
 """
 
 from __future__ import annotations
 
 import enum
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
@@ -24,17 +32,25 @@ __all__ = [
     "CARRIER_OPTIONAL",
     "CARRIER_SCHEMA",
     "EVENT_SCHEMA",
+    "INT64_MAX",
+    "MAX_EVENT_TIME",
+    "MAX_EVENT_VALUE",
+    "MIN_NONZERO_TIME",
     "MISSING_ID",
+    "TIME_COLUMNS",
     "TIME_UNITS",
     "TIME_UNIT_COLUMN",
     "ColumnSpec",
     "Kind",
     "RowLocator",
     "check_column",
+    "check_text_cells",
     "check_time_unit",
     "finish_float",
     "finish_int",
     "finish_text",
+    "shown",
+    "too_large",
 ]
 
 MISSING_ID: Final = -1
@@ -42,7 +58,22 @@ MISSING_ID: Final = -1
 TIME_UNITS: Final = ("tick", "s")
 """Allowed values of the optional ``time_unit`` column: simulator ticks or seconds."""
 TIME_UNIT_COLUMN: Final = "time_unit"
-_INT64_MAX: Final = int(np.iinfo(np.int64).max)
+INT64_MAX: Final = int(np.iinfo(np.int64).max)
+"""The largest integer any integer column holds (the columns are int64)."""
+MAX_EVENT_TIME: Final = 1e12
+"""The largest time (ticks or seconds) a log may hold: 30 000 years of seconds.
+
+Far beyond any run, yet small enough that sums of millions of latencies and
+the statistics on them stay finite (a time of 1e308 overflowed them).
+"""
+MIN_NONZERO_TIME: Final = 1e-9
+"""The smallest nonzero time (in size): a nanosecond, or a billionth of a tick.
+
+Finer times carry no meaning; refusing them keeps throughput's
+``100 * n / (t_last - t_first)`` finite (two deliveries at 0 and 5e-324 gave inf).
+"""
+MAX_EVENT_VALUE: Final = 1e12
+"""The largest size of a non-time number (an event's ``value``: an urgency, a count)."""
 
 
 class Kind(enum.Enum):
@@ -55,28 +86,38 @@ class Kind(enum.Enum):
 
 @dataclass(frozen=True, slots=True)
 class ColumnSpec:
-    """One column: its name, kind, whether a cell may be empty, and its integer range.
+    """One column: its name, kind, whether a cell may be empty, and its range.
 
     An empty cell means "never" or "none": NaN for numbers, ``MISSING_ID`` for
-    integers.
+    integers. Integer columns without a ``maximum`` end at ``INT64_MAX``. A
+    ``time`` column's nonzero values are at least ``MIN_NONZERO_TIME`` in size.
     """
 
     name: str
     kind: Kind
     nullable: bool = False
-    minimum: int | None = None
-    maximum: int | None = None
+    minimum: float | None = None
+    maximum: float | None = None
+    time: bool = False
 
     def expected(self) -> str:
         """What a valid cell looks like, for messages: ``an integer in 0-9``."""
         text = self.kind.value
-        if self.minimum is not None and self.maximum is not None:
-            text += f" in {self.minimum}-{self.maximum}"
+        if self.kind is Kind.FLOAT and self.minimum is not None and self.maximum is not None:
+            text += f" in [{self.minimum:g}, {self.maximum:g}]"
+        elif self.minimum is not None and self.maximum is not None:
+            text += f" in {int(self.minimum)}-{int(self.maximum)}"
         elif self.minimum is not None:
-            text += f" >= {self.minimum}"
+            text += f" >= {int(self.minimum)}"
         if self.nullable:
             text += ", or empty"
         return text
+
+    def int_range(self) -> str:
+        """The full range of an integer column, int64's end included: ``0-9223372036854775807``."""
+        low = -INT64_MAX - 1 if self.minimum is None else int(self.minimum)
+        high = INT64_MAX if self.maximum is None else int(self.maximum)
+        return f"an integer in {low}-{high}"
 
 
 CARRIER_SCHEMA: Final = (
@@ -85,15 +126,21 @@ CARRIER_SCHEMA: Final = (
     ColumnSpec("seed", Kind.INT, minimum=0),
     ColumnSpec("carrier", Kind.INT, minimum=0),
     ColumnSpec("urgency0", Kind.INT, minimum=0, maximum=9),
-    ColumnSpec("order_time", Kind.FLOAT),
-    ColumnSpec("pickup_time", Kind.FLOAT, nullable=True),
-    ColumnSpec("delivery_time", Kind.FLOAT, nullable=True),
+    ColumnSpec(
+        "order_time", Kind.FLOAT, minimum=-MAX_EVENT_TIME, maximum=MAX_EVENT_TIME, time=True
+    ),
+    ColumnSpec(
+        "pickup_time", Kind.FLOAT, nullable=True, minimum=0, maximum=MAX_EVENT_TIME, time=True
+    ),
+    ColumnSpec(
+        "delivery_time", Kind.FLOAT, nullable=True, minimum=0, maximum=MAX_EVENT_TIME, time=True
+    ),
     ColumnSpec("robot", Kind.INT, nullable=True, minimum=0),
 )
 """The per-carrier table: one row per carrier per run, in the order files carry it."""
 
 CARRIER_OPTIONAL: Final = (
-    ColumnSpec("run_end", Kind.FLOAT, nullable=True),
+    ColumnSpec("run_end", Kind.FLOAT, nullable=True, minimum=0, maximum=MAX_EVENT_TIME, time=True),
     ColumnSpec("urgency_end", Kind.INT, nullable=True, minimum=0, maximum=9),
 )
 """Optional per-carrier columns (extra columns SPEC §8.1 allows), after the schema's in files.
@@ -108,13 +155,20 @@ EVENT_SCHEMA: Final = (
     ColumnSpec("condition", Kind.TEXT),
     ColumnSpec("seed", Kind.INT, minimum=0),
     ColumnSpec("run", Kind.INT, minimum=0),
-    ColumnSpec("time", Kind.FLOAT),
+    ColumnSpec("time", Kind.FLOAT, minimum=0, maximum=MAX_EVENT_TIME, time=True),
     ColumnSpec("kind", Kind.TEXT),
     ColumnSpec("carrier", Kind.INT, nullable=True, minimum=0),
     ColumnSpec("robot", Kind.INT, nullable=True, minimum=0),
-    ColumnSpec("value", Kind.FLOAT, nullable=True),
+    ColumnSpec(
+        "value", Kind.FLOAT, nullable=True, minimum=-MAX_EVENT_VALUE, maximum=MAX_EVENT_VALUE
+    ),
 )
 """The optional long-format event table: everything else that happened in a run."""
+
+TIME_COLUMNS: Final = tuple(
+    spec.name for spec in (*CARRIER_SCHEMA, *CARRIER_OPTIONAL, *EVENT_SCHEMA) if spec.time
+)
+"""Every column that holds a time: ``order_time``, ``pickup_time``, ``delivery_time``, ..."""
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -168,12 +222,43 @@ def _empty_error(spec: ColumnSpec, index: int, loc: RowLocator) -> EventLogError
     return loc.error(index, spec.name, f"is empty; expected {spec.expected()}")
 
 
+_CONTROL: Final = re.compile("[\x00-\x1f\x7f-\x9f]")
+_SHOWN: Final = 40
+
+
+def shown(text: str) -> str:
+    """``text`` quoted for a message, cut to a few dozen characters (a cell may be huge)."""
+    return repr(text) if len(text) <= _SHOWN else repr(text[:_SHOWN]) + "..."
+
+
+def check_text_cells(spec: ColumnSpec, texts: Sequence[str], loc: RowLocator) -> None:
+    """Refuse a text cell holding a control character (a NUL byte, a line break, an escape).
+
+    Condition names and event kinds end up in terminals, tables and file
+    names, where such characters corrupt the output or hide what is there.
+    """
+    if not _CONTROL.search("".join(texts)):
+        return
+    for index, text in enumerate(texts):
+        found = _CONTROL.search(text)
+        if found:
+            char = found.group()
+            what = "a NUL byte" if char == "\x00" else f"control character {char!r}"
+            raise loc.error(index, spec.name, f"{shown(text)} holds {what}; expected plain text")
+
+
 def finish_text(spec: ColumnSpec, values: NDArray[np.str_], loc: RowLocator) -> NDArray[np.str_]:
-    """Check a text column (already stripped): no empty cell."""
+    """Check a text column (already stripped): no empty cell, no control character."""
     bad = _first(values == "")
     if bad is not None:
         raise _empty_error(spec, bad, loc)
+    check_text_cells(spec, values.tolist(), loc)
     return values
+
+
+def too_large(spec: ColumnSpec, shown_value: str) -> str:
+    """The message for an integer beyond int64 or the column's range, with the range."""
+    return f"{shown_value} is too large; expected {spec.int_range()}"
 
 
 def finish_int(
@@ -198,7 +283,10 @@ def finish_int(
 def finish_float(
     spec: ColumnSpec, values: NDArray[np.float64], present: NDArray[np.bool_], loc: RowLocator
 ) -> NDArray[np.float64]:
-    """Check that the present numbers are finite; fill missing cells with NaN."""
+    """Check that the present numbers are finite and in range; fill missing cells with NaN.
+
+    A time column's nonzero values must also be at least ``MIN_NONZERO_TIME`` in size.
+    """
     if not spec.nullable:
         bad = _first(~present)
         if bad is not None:
@@ -206,6 +294,25 @@ def finish_float(
     bad = _first(present & ~np.isfinite(values))
     if bad is not None:
         raise loc.error(bad, spec.name, f"{float(values[bad])!r} is not a finite number")
+    outside = np.zeros(values.shape, dtype=bool)
+    if spec.minimum is not None:
+        outside |= values < spec.minimum
+    if spec.maximum is not None:
+        outside |= values > spec.maximum
+    bad = _first(present & outside)
+    if bad is not None:
+        raise loc.error(
+            bad, spec.name, f"{float(values[bad])!r} is out of range; expected {spec.expected()}"
+        )
+    if spec.time:
+        bad = _first(present & (values != 0) & (np.abs(values) < MIN_NONZERO_TIME))
+        if bad is not None:
+            raise loc.error(
+                bad,
+                spec.name,
+                f"{float(values[bad])!r} is too close to 0; a time is 0 or at least "
+                f"{MIN_NONZERO_TIME:g} (ticks or seconds) away from it",
+            )
     return np.where(present, values, np.nan)
 
 
@@ -215,35 +322,57 @@ def _wrong_type(spec: ColumnSpec, dtype: np.dtype[np.generic], loc: RowLocator) 
 
 def _check_text(spec: ColumnSpec, arr: NDArray[np.generic], loc: RowLocator) -> NDArray[np.str_]:
     if arr.dtype.kind == "O":
-        for index, item in enumerate(arr.tolist()):
+        items = arr.tolist()
+        for index, item in enumerate(items):
             if not isinstance(item, str):
                 raise loc.error(index, spec.name, f"{item!r} is not {spec.kind.value}")
+        check_text_cells(spec, items, loc)  # before numpy drops trailing NUL characters
         arr = arr.astype(str)
     if arr.dtype.kind != "U":
         raise _wrong_type(spec, arr.dtype, loc)
     text = arr.astype(str)
     bad = _first(np.char.strip(text) != text)
     if bad is not None:
-        raise loc.error(bad, spec.name, f"{str(text[bad])!r} has white space at its ends")
+        raise loc.error(bad, spec.name, f"{shown(str(text[bad]))} has white space at its ends")
     return finish_text(spec, text, loc)
 
 
+def _check_python_ints(
+    spec: ColumnSpec, arr: NDArray[np.generic], loc: RowLocator
+) -> NDArray[np.int64]:
+    """An object array of Python integers (numpy's choice for ints beyond int64)."""
+    items = arr.tolist()
+    for index, item in enumerate(items):
+        if not isinstance(item, int) or isinstance(item, bool):
+            raise loc.error(index, spec.name, f"{item!r} is not {spec.kind.value}")
+        if not -INT64_MAX - 1 <= item <= INT64_MAX:
+            raise loc.error(index, spec.name, too_large(spec, str(item)))
+    values = np.array(items, dtype=np.int64)
+    present = values != MISSING_ID if spec.nullable else np.ones(values.shape, dtype=bool)
+    return finish_int(spec, values, present, loc)
+
+
 def _check_int(spec: ColumnSpec, arr: NDArray[np.generic], loc: RowLocator) -> NDArray[np.int64]:
+    if arr.dtype.kind == "O":
+        return _check_python_ints(spec, arr, loc)
     if arr.dtype.kind == "f":
         floats = arr.astype(np.float64)
         finite = np.isfinite(floats)
         bad = _first(~finite & ~np.isnan(floats)) if spec.nullable else _first(~finite)
         if bad is None:
-            bad = _first(finite & ((floats != np.round(floats)) | (np.abs(floats) >= 2.0**63)))
+            bad = _first(finite & (floats != np.round(floats)))
         if bad is not None:
             raise loc.error(bad, spec.name, f"{float(floats[bad])!r} is not {spec.expected()}")
+        bad = _first(finite & (np.abs(floats) >= 2.0**63))
+        if bad is not None:
+            raise loc.error(bad, spec.name, too_large(spec, repr(float(floats[bad]))))
         values = np.where(finite, floats, 0).astype(np.int64)
         return finish_int(spec, values, finite, loc)
     if arr.dtype.kind == "u":
         unsigned = arr.astype(np.uint64)
-        bad = _first(unsigned > _INT64_MAX)
+        bad = _first(unsigned > INT64_MAX)
         if bad is not None:
-            raise loc.error(bad, spec.name, f"{int(unsigned[bad])} is too large")
+            raise loc.error(bad, spec.name, too_large(spec, str(int(unsigned[bad]))))
     elif arr.dtype.kind != "i":
         raise _wrong_type(spec, arr.dtype, loc)
     values = arr.astype(np.int64)

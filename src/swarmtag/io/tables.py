@@ -163,12 +163,14 @@ class CarrierLog(_Columns):
 
     Missing times are NaN, a missing robot is ``MISSING_ID`` (-1). Arrays are
     copied and made read-only. The constructor checks every column's type and
-    range, that a delivered carrier has a pickup time no later than its
-    delivery and a robot, that no run of a condition lists a carrier twice,
-    and that a run has one seed. The optional ``run_end`` (when the run's
-    observation ended; NaN if not given) must be one value per run, not before
-    any pickup or delivery of the run; the optional ``urgency_end`` (urgency
-    when delivered, or at run end; ``MISSING_ID`` if not given) is 0-9.
+    range (times: see ``swarmtag.io.schema``), that ``order_time <=
+    pickup_time <= delivery_time`` where those are set, that a delivered
+    carrier has a pickup time and a robot, that no run of a condition lists a
+    carrier twice, and that a run has one seed. The optional ``run_end`` (when
+    the run's observation ended; NaN if not given) must be one value per run,
+    not before any order, pickup or delivery of the run; the optional
+    ``urgency_end`` (urgency when delivered, or at run end; ``MISSING_ID`` if
+    not given) is 0-9.
 
     >>> nan = float("nan")
     >>> log = CarrierLog(
@@ -240,6 +242,24 @@ class CarrierLog(_Columns):
 
     def _check_rows(self, loc: RowLocator) -> None:
         delivered = ~np.isnan(self.delivery_time)
+        bad = np.flatnonzero(self.pickup_time < self.order_time)  # NaN compares False
+        if bad.size:
+            i = int(bad[0])
+            raise loc.error(
+                i,
+                "pickup_time",
+                f"{float(self.pickup_time[i])!r} is before order_time "
+                f"{float(self.order_time[i])!r}; a carrier is picked up after it is ordered",
+            )
+        bad = np.flatnonzero(self.delivery_time < self.order_time)
+        if bad.size:
+            i = int(bad[0])
+            raise loc.error(
+                i,
+                "delivery_time",
+                f"{float(self.delivery_time[i])!r} is before order_time "
+                f"{float(self.order_time[i])!r}; a latency cannot be negative",
+            )
         bad = np.flatnonzero(delivered & np.isnan(self.pickup_time))
         if bad.size:
             raise loc.error(
@@ -265,7 +285,11 @@ class CarrierLog(_Columns):
         self._check_run_end(loc)
 
     def _check_run_end(self, loc: RowLocator) -> None:
-        """``run_end`` is one value per run (or empty for all its rows), after its events."""
+        """``run_end`` is one value per run (or empty for all its rows), after its events.
+
+        After its orders too: a carrier ordered after the run ended would get a
+        negative censored latency (run end - order time).
+        """
         if len(self) == 0 or np.isnan(self.run_end).all():
             return
         names, codes = np.unique(self.condition, return_inverse=True)
@@ -290,16 +314,20 @@ class CarrierLog(_Columns):
                 f"the same run ({int(self.run[second])} of {names[codes[second]]}); "
                 "a run has one run_end",
             )
-        for column in ("pickup_time", "delivery_time"):
+        for column in ("pickup_time", "delivery_time", "order_time"):
             times = getattr(self, column)
             bad = np.flatnonzero(self.run_end < times)  # NaN on either side compares False
             if bad.size:
                 i = int(bad[0])
+                why = (
+                    "a carrier of a run is ordered before the run ends"
+                    if column == "order_time"
+                    else "a run ends after its last pickup and delivery"
+                )
                 raise loc.error(
                     i,
                     "run_end",
-                    f"{float(self.run_end[i])!r} is before {column} {float(times[i])!r}; "
-                    "a run ends after its last pickup and delivery",
+                    f"{float(self.run_end[i])!r} is before {column} {float(times[i])!r}; {why}",
                 )
 
     def _check_keys(self, loc: RowLocator) -> None:

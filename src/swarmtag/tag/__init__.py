@@ -21,7 +21,7 @@ from swarmtag.tag.filestore import FileStore
 from swarmtag.tag.gatt import ATT_ERRORS, SERVICE_UUID, STATE_CHAR_UUID, WRITE_CHAR_UUID
 from swarmtag.tag.lifecycle import ROBOT_TRANSITIONS, Change, Role, apply_change
 from swarmtag.tag.model import MemoryStore, TagModel, TagStore
-from swarmtag.tag.record import TagRecord
+from swarmtag.tag.record import MAX_WRITERS, TagRecord
 from swarmtag.tag.scan import ScanFilter
 from swarmtag.tag.status import TagStatus
 from swarmtag.tag.write import (
@@ -40,6 +40,7 @@ __all__ = [
     "FIELD_LENGTH",
     "MAC_LENGTH",
     "MAX_URGENCY",
+    "MAX_WRITERS",
     "PAYLOAD_LENGTH",
     "ROBOT_TRANSITIONS",
     "SERVICE_UUID",

@@ -3,7 +3,9 @@
 A tag advertises manufacturer-specific data ``ff ff UU SS DD MM``: company id
 0xFFFF, urgency 0-9, status, destination and marker id. BLE stacks hand the
 same data over as ``{0xFFFF: bytes([UU, SS, DD, MM])}``; both forms are read
-and written here. Decoding never raises anything but a ``PayloadError``.
+and written here. Decoding never raises anything but a ``PayloadError`` (also
+for input that is not bytes at all); building a ``TagState`` from bad values
+or encoding something else raises ``FieldRangeError``.
 """
 
 from __future__ import annotations
@@ -15,10 +17,12 @@ from typing import Final
 from swarmtag.errors import (
     FieldRangeError,
     ForeignCompanyError,
+    PayloadError,
     PayloadLengthError,
     UnknownStatusError,
     UrgencyRangeError,
 )
+from swarmtag.tag._arguments import as_bytes, check_int, check_type, describe
 from swarmtag.tag.status import TagStatus
 
 __all__ = [
@@ -60,16 +64,19 @@ class TagState:
 
     def __post_init__(self) -> None:
         for name, _offset, high in _FIELDS:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= high:
-                raise FieldRangeError(f"{name}: {value!r} is not an integer in 0-{high}")
+            check_int(name, getattr(self, name), high)
         status: object = self.status  # callers without a type checker may pass 1 or "idle"
         if not isinstance(status, TagStatus):
-            object.__setattr__(self, "status", TagStatus.parse(str(status)))
+            if isinstance(status, bool) or not isinstance(status, str | int):
+                raise FieldRangeError(
+                    f"status: {describe(status)} is not a TagStatus, a status name or 0-2"
+                )
+            object.__setattr__(self, "status", TagStatus.parse(status))
 
 
 def encode_manufacturer_data(state: TagState) -> dict[int, bytes]:
     """The mapping form BLE stacks use: ``{0xFFFF: bytes([urgency, status, dest, marker])}``."""
+    check_type("state", state, TagState)
     return {COMPANY_ID: bytes((state.urgency, state.status, state.destination, state.marker))}
 
 
@@ -106,7 +113,7 @@ def decode(payload: bytes | bytearray | memoryview) -> TagState:
     >>> decode(bytes.fromhex("ffff0701030c")).marker
     12
     """
-    data = bytes(payload)
+    data = as_bytes("payload", payload, PayloadError)
     if len(data) != PAYLOAD_LENGTH:
         raise PayloadLengthError(f"payload has {len(data)} bytes, expected {PAYLOAD_LENGTH}")
     company = int.from_bytes(data[:2], "little")
@@ -118,12 +125,25 @@ def decode(payload: bytes | bytearray | memoryview) -> TagState:
 def decode_manufacturer_data(data: Mapping[int, bytes | bytearray | memoryview]) -> TagState:
     r"""Read the mapping form; entries of other companies are ignored.
 
-    Raises ``ForeignCompanyError`` when no 0xFFFF entry is present.
+    Raises ``ForeignCompanyError`` when no 0xFFFF entry is present, and
+    ``PayloadError`` when ``data`` is not a mapping or its entry is not bytes.
 
     >>> decode_manufacturer_data({0x004C: b"\x02\x15", 0xFFFF: b"\x09\x02\x00\x05"}).urgency
     9
     """
+    given: object = data  # callers without a type checker may pass anything
+    if not isinstance(given, Mapping):
+        raise PayloadError(
+            f"manufacturer data: expected a mapping company id -> bytes, got {type(given).__name__}"
+        )
     if COMPANY_ID not in data:
-        others = ", ".join(f"0x{company:04x}" for company in sorted(data)) or "none"
+        others = ", ".join(sorted(map(_company, data))) or "none"
         raise ForeignCompanyError(f"no manufacturer data for company 0xffff (found: {others})")
-    return _decode_fields(bytes(data[COMPANY_ID]))
+    return _decode_fields(as_bytes("manufacturer data for 0xffff", data[COMPANY_ID], PayloadError))
+
+
+def _company(key: object) -> str:
+    """A company id as hex for a message; keys of the wrong type are shown, not sorted as ints."""
+    if isinstance(key, int) and 0 <= key <= 0xFFFF:
+        return f"0x{key:04x}"
+    return describe(key)

@@ -17,6 +17,7 @@ from swarmtag.errors import (
     ReplayedWrite,
     RoleNotAllowed,
     WriteRejected,
+    WriterTableFull,
     WrongTarget,
 )
 
@@ -35,6 +36,7 @@ ATT_ERRORS: Final[dict[type[WriteRejected], int]] = {
         WrongTarget,
         RoleNotAllowed,
         IllegalTransition,
+        WriterTableFull,
     )
 }
 """The ATT error code a hardware tag answers for each refusal."""

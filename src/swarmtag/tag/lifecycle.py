@@ -10,20 +10,39 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from enum import IntEnum
-from typing import Final
+from typing import Final, NoReturn
 
-from swarmtag.errors import IllegalTransition, RoleNotAllowed
+from swarmtag.errors import FieldRangeError, IllegalTransition, RoleNotAllowed
+from swarmtag.tag._arguments import CheckedEnumType, check_type, describe
 from swarmtag.tag.codec import TagState
 from swarmtag.tag.status import TagStatus
 
-__all__ = ["ROBOT_TRANSITIONS", "Change", "Role", "apply_change"]
+__all__ = ["ROBOT_TRANSITIONS", "Change", "Role", "apply_change", "check_role"]
+
+_ROLES: Final = "use Role.ROBOT (1) or Role.OPERATOR (2)"
 
 
-class Role(IntEnum):
+class Role(IntEnum, metaclass=CheckedEnumType):
     """Who signs a write; the number is carried in the write's flags byte."""
 
     ROBOT = 1
     OPERATOR = 2
+
+    @classmethod
+    def _missing_(cls, value: object) -> NoReturn:
+        """Refuse an unknown role with ``FieldRangeError`` (still a ``ValueError``)."""
+        raise FieldRangeError(f"role: {describe(value)} is not a writer role; {_ROLES}")
+
+
+def check_role(value: object) -> Role:
+    """``value`` as a ``Role`` if it is one (or its number 1 or 2); else ``FieldRangeError``.
+
+    >>> check_role(2)
+    <Role.OPERATOR: 2>
+    """
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise FieldRangeError(f"role: {describe(value)} is not a writer role; {_ROLES}")
+    return Role(value)
 
 
 ROBOT_TRANSITIONS: Final = frozenset(
@@ -37,11 +56,27 @@ ROBOT_TRANSITIONS: Final = frozenset(
 
 @dataclass(frozen=True, slots=True)
 class Change:
-    """The fields a write sets; ``None`` leaves a field as it is."""
+    """The fields a write sets; ``None`` leaves a field as it is.
+
+    Types are checked here (and a status name or number becomes a ``TagStatus``);
+    ranges are checked where the change is used (``Write``, ``TagState``), which
+    name the field.
+    """
 
     urgency: int | None = None
     status: TagStatus | None = None
     destination: int | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("urgency", "destination"):
+            value: object = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, int)):
+                raise FieldRangeError(f"{name}: {describe(value)} is not an integer or None")
+        status: object = self.status
+        if status is not None and not isinstance(status, TagStatus):
+            if isinstance(status, bool) or not isinstance(status, str | int):
+                raise FieldRangeError(f"status: {describe(status)} is not a TagStatus or None")
+            object.__setattr__(self, "status", TagStatus.parse(status))
 
     @property
     def empty(self) -> bool:
@@ -52,12 +87,16 @@ class Change:
 def apply_change(state: TagState, change: Change, role: Role) -> TagState:
     """The state after ``role`` applies ``change``; raise if that role may not.
 
-    Field ranges are checked by ``TagState`` itself.
+    Field ranges are checked by ``TagState`` itself; arguments of the wrong type
+    raise ``FieldRangeError``.
 
     >>> s = TagState(urgency=4, status=TagStatus.AWAITING_PICKUP, destination=0, marker=3)
     >>> apply_change(s, Change(status=TagStatus.PICKED_UP), Role.ROBOT).status.name
     'PICKED_UP'
     """
+    check_type("state", state, TagState)
+    check_type("change", change, Change)
+    role = check_role(role)
     if role is Role.ROBOT:
         if change.urgency is not None or change.destination is not None:
             fields = [

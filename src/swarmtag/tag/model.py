@@ -2,19 +2,27 @@
 
 ``TagModel`` is what runs on the nRF board (and in the software tag and the
 simulator): it verifies the MAC, the target, the writer's counter and the
-role's rights, persists the new record *before* acting on it (so a power
-loss can never make a used counter usable again), and only then changes.
+role's rights and that its writer table has room, persists the new record
+*before* acting on it (so a power loss can never make a used counter usable
+again), and only then changes.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Protocol
+from typing import Protocol, cast
 
-from swarmtag.errors import ReplayedWrite, StateRecordError, WrongTarget
+from swarmtag.errors import (
+    FieldRangeError,
+    ReplayedWrite,
+    StateRecordError,
+    WriterTableFull,
+    WrongTarget,
+)
+from swarmtag.tag._arguments import as_bytes, check_type
 from swarmtag.tag.codec import TagState
 from swarmtag.tag.lifecycle import apply_change
-from swarmtag.tag.record import TagRecord
+from swarmtag.tag.record import MAX_WRITERS, TagRecord
 from swarmtag.tag.write import check_site_key, verify
 
 __all__ = ["MemoryStore", "TagModel", "TagStore"]
@@ -41,8 +49,18 @@ class MemoryStore:
         return self._record
 
     def save(self, record: bytes) -> None:
-        """Keep ``record``."""
-        self._record = bytes(record)
+        """Keep ``record`` (bytes-like; anything else is a ``StateRecordError``)."""
+        self._record = as_bytes("record", record, StateRecordError)
+
+
+def _check_store(store: object) -> TagStore:
+    """``store`` if it has callable ``load`` and ``save``; else ``FieldRangeError``."""
+    if not all(callable(getattr(store, name, None)) for name in ("load", "save")):
+        raise FieldRangeError(
+            f"store: a {type(store).__name__} has no load() and save(); "
+            "use MemoryStore, FileStore or another TagStore"
+        )
+    return cast("TagStore", store)
 
 
 class TagModel:
@@ -65,21 +83,25 @@ class TagModel:
     """
 
     def __init__(self, record: TagRecord, *, site_key: bytes, store: TagStore) -> None:
-        self._record = record
+        self._record = check_type("record", record, TagRecord)
         self._key = check_site_key(site_key)
-        self._store = store
+        self._store = _check_store(store)
 
     @classmethod
     def provision(cls, state: TagState, *, site_key: bytes, store: TagStore) -> TagModel:
-        """Set up a tag from scratch: ``state``, no writers seen; persist it."""
-        record = TagRecord(state=state)
-        store.save(record.to_bytes())
-        return cls(record, site_key=site_key, store=store)
+        """Set up a tag from scratch: ``state``, no writers seen; persist it.
+
+        Every argument is checked before anything is saved.
+        """
+        tag = cls(TagRecord(state=state), site_key=site_key, store=store)
+        tag._store.save(tag._record.to_bytes())
+        return tag
 
     @classmethod
     def boot(cls, *, site_key: bytes, store: TagStore) -> TagModel:
         """Power on: restore state and counters from ``store``."""
-        data = store.load()
+        check_site_key(site_key)
+        data = _check_store(store).load()
         if data is None:
             raise StateRecordError("the tag's store is empty: provision the tag first")
         return cls(TagRecord.from_bytes(data), site_key=site_key, store=store)
@@ -94,12 +116,14 @@ class TagModel:
         """Highest counter accepted from each writer id."""
         return self._record.counters
 
-    def apply(self, message: bytes) -> TagState:
+    def apply(self, message: bytes | bytearray | memoryview) -> TagState:
         """Apply one 20-byte write and return the new state, or raise ``WriteRejected``.
 
         A refused write changes nothing: not the state, not the counters, not the store.
+        A message that is not bytes-like is a ``MalformedWrite``; a write from a new
+        writer when ``MAX_WRITERS`` are already tracked is ``WriterTableFull``.
         """
-        write = verify(message, self._key)
+        write = verify(message, self._key)  # refuses a message that is not bytes-like, too
         state = self._record.state
         if write.target != state.marker:
             raise WrongTarget(f"the write is for tag {write.target}, this is tag {state.marker}")
@@ -109,8 +133,15 @@ class TagModel:
                 f"counter {write.counter} from writer {write.writer} is not above "
                 f"the highest seen ({last}): replay refused"
             )
+        new_state = apply_change(state, write.change, write.role)
+        if last is None and len(self._record.counters) >= MAX_WRITERS:
+            raise WriterTableFull(
+                f"tag {state.marker} already tracks {MAX_WRITERS} writers, the most it can; "
+                f"writer {write.writer} is new and refused (reuse a known writer id, or rotate "
+                "the site key and re-provision the tag)"
+            )
         new = TagRecord(
-            state=apply_change(state, write.change, write.role),
+            state=new_state,
             counters={**self._record.counters, write.writer: write.counter},
         )
         self._store.save(new.to_bytes())

@@ -11,11 +11,16 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Final
 
-from swarmtag.errors import ForeignCompanyError, PayloadError
+from swarmtag.errors import FieldRangeError, ForeignCompanyError, PayloadError
+from swarmtag.tag._arguments import check_int
 from swarmtag.tag.codec import TagState, decode, decode_manufacturer_data
 
 __all__ = ["ScanFilter"]
+
+_MAX_COUNT: Final = 2**63 - 1
+"""Largest starting count accepted: far beyond any scan, and a signed 64-bit value."""
 
 
 @dataclass
@@ -38,13 +43,30 @@ class ScanFilter:
     errors: Counter[str] = field(default_factory=Counter)
     """Malformed payloads by error class name (e.g. ``UrgencyRangeError``)."""
 
+    def __post_init__(self) -> None:
+        """Refuse starting counts that ``feed`` could not add to (``FieldRangeError``)."""
+        check_int("accepted", self.accepted, _MAX_COUNT)
+        check_int("foreign", self.foreign, _MAX_COUNT)
+        errors: object = self.errors
+        if not isinstance(errors, Counter):
+            raise FieldRangeError(f"errors: expected a Counter, got {type(errors).__name__}")
+        for name, count in errors.items():
+            if not isinstance(name, str):
+                raise FieldRangeError(
+                    f"errors: keys are error class names, got {type(name).__name__}"
+                )
+            check_int(f"errors[{name!r}]", count, _MAX_COUNT)
+
     @property
     def malformed(self) -> int:
         """How many payloads claimed to be ours but could not be decoded."""
         return sum(self.errors.values())
 
     def feed(self, manufacturer_data: Mapping[int, bytes] | bytes) -> TagState | None:
-        """Decode the mapping form (or raw 6-byte form); ``None`` if foreign or malformed."""
+        """Decode the mapping form (or raw 6-byte form); ``None`` if foreign or malformed.
+
+        Input that is neither (a str, None, a number) counts as malformed ``PayloadError``.
+        """
         try:
             if isinstance(manufacturer_data, Mapping):
                 state = decode_manufacturer_data(manufacturer_data)

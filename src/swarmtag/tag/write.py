@@ -15,7 +15,8 @@ Layout (multi-byte integers little-endian, as everywhere in BLE)::
     bytes 12-19  MAC: HMAC-SHA256(site key, bytes 0-11) truncated to 8 bytes
 
 The MAC is checked before any other field is interpreted, so a forger learns
-nothing from which error comes back.
+nothing from which error comes back. Arguments of the wrong type or range
+raise ``FieldRangeError`` (``MalformedWrite`` for a message that is not bytes).
 """
 
 from __future__ import annotations
@@ -26,8 +27,9 @@ from dataclasses import dataclass
 from typing import Final
 
 from swarmtag.errors import FieldRangeError, ForgedWrite, MalformedWrite
+from swarmtag.tag._arguments import as_bytes, check_int, check_type
 from swarmtag.tag.codec import MAX_URGENCY
-from swarmtag.tag.lifecycle import Change, Role
+from swarmtag.tag.lifecycle import Change, Role, check_role
 from swarmtag.tag.status import TagStatus
 
 __all__ = [
@@ -58,17 +60,12 @@ _DESTINATION_BIT: Final = 0x40
 _KNOWN_BITS: Final = _ROLE_BITS | _URGENCY_BIT | _STATUS_BIT | _DESTINATION_BIT
 
 
-def check_site_key(key: bytes) -> bytes:
-    """Return ``key`` as bytes if it is a usable site key (at least 16 bytes)."""
-    if not isinstance(key, bytes | bytearray) or len(key) < MIN_KEY_LENGTH:
-        size = len(key) if isinstance(key, bytes | bytearray) else type(key).__name__
-        raise FieldRangeError(f"site_key: must be at least {MIN_KEY_LENGTH} bytes, got {size}")
-    return bytes(key)
-
-
-def _in_range(name: str, value: int, high: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= high:
-        raise FieldRangeError(f"{name}: {value!r} is not an integer in 0-{high}")
+def check_site_key(key: bytes | bytearray | memoryview) -> bytes:
+    """Return ``key`` as bytes if it is a usable site key (bytes-like, at least 16 bytes)."""
+    data = as_bytes("site_key", key, FieldRangeError)
+    if len(data) < MIN_KEY_LENGTH:
+        raise FieldRangeError(f"site_key: must be at least {MIN_KEY_LENGTH} bytes, got {len(data)}")
+    return data
 
 
 @dataclass(frozen=True, slots=True)
@@ -82,16 +79,16 @@ class Write:
     change: Change
 
     def __post_init__(self) -> None:
-        _in_range("writer", self.writer, 0xFFFF)
-        _in_range("counter", self.counter, MAX_COUNTER)
-        _in_range("target", self.target, 0xFF)
-        object.__setattr__(self, "role", Role(self.role))
-        if self.change.empty:
+        check_int("writer", self.writer, 0xFFFF)
+        check_int("counter", self.counter, MAX_COUNTER)
+        check_int("target", self.target, 0xFF)
+        object.__setattr__(self, "role", check_role(self.role))
+        if check_type("change", self.change, Change).empty:
             raise FieldRangeError("change: a write must set at least one field")
         if self.change.urgency is not None:
-            _in_range("urgency", self.change.urgency, MAX_URGENCY)
+            check_int("urgency", self.change.urgency, MAX_URGENCY)
         if self.change.destination is not None:
-            _in_range("destination", self.change.destination, 0xFF)
+            check_int("destination", self.change.destination, 0xFF)
         if self.change.status is not None and not isinstance(self.change.status, TagStatus):
             raise FieldRangeError(f"status: {self.change.status!r} is not a TagStatus")
 
@@ -108,7 +105,7 @@ def sign(write: Write, key: bytes) -> bytes:
     >>> len(msg), msg[:12].hex()
     (20, '01210700010000000c000200')
     """
-    change = write.change
+    change = check_type("write", write, Write).change
     flags = int(write.role)
     flags |= _URGENCY_BIT if change.urgency is not None else 0
     flags |= _STATUS_BIT if change.status is not None else 0
@@ -131,7 +128,7 @@ def sign(write: Write, key: bytes) -> bytes:
 
 def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
     """Check the MAC, then parse; raise ``ForgedWrite`` or ``MalformedWrite`` if not valid."""
-    data = bytes(message)
+    data = as_bytes("message", message, MalformedWrite)
     if len(data) != WRITE_LENGTH:
         raise MalformedWrite(f"a write is {WRITE_LENGTH} bytes, got {len(data)}")
     signed, tag = data[:_SIGNED], data[_SIGNED:]
@@ -184,8 +181,10 @@ def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
 class WriteSigner:
     """A writer's side: signs changes with its id, role and an increasing counter.
 
-    ``counter`` is the last counter used; persist it across restarts (the tags
-    refuse any counter they have already seen from this writer).
+    ``counter`` is the last counter used (-1: none yet); persist it across
+    restarts (the tags refuse any counter they have already seen from this
+    writer). Every argument is checked here, so a bad one fails at set-up,
+    not at the first write.
     """
 
     writer: int
@@ -194,11 +193,21 @@ class WriteSigner:
     counter: int = -1
 
     def __post_init__(self) -> None:
+        check_int("writer", self.writer, 0xFFFF)
+        self.role = check_role(self.role)
         self.key = check_site_key(self.key)
-        _in_range("writer", self.writer, 0xFFFF)
+        check_int("counter", self.counter, MAX_COUNTER, low=-1)
 
     def sign(self, target: int, change: Change) -> bytes:
-        """Sign ``change`` for the tag with marker ``target`` using the next counter."""
+        """Sign ``change`` for the tag with marker ``target`` using the next counter.
+
+        A refused argument leaves ``counter`` as it was.
+        """
+        if check_int("counter", self.counter, MAX_COUNTER, low=-1) == MAX_COUNTER:
+            raise FieldRangeError(
+                f"counter: writer {self.writer} has used its last counter ({MAX_COUNTER}); "
+                "retire this writer id and sign with a new one"
+            )
         write = Write(
             writer=self.writer,
             role=self.role,
@@ -206,5 +215,6 @@ class WriteSigner:
             target=target,
             change=change,
         )
+        message = sign(write, self.key)
         self.counter = write.counter
-        return sign(write, self.key)
+        return message

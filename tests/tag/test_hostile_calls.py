@@ -1,0 +1,230 @@
+"""Every public callable of ``swarmtag.tag``, called with arbitrary Python values.
+
+Only ``SwarmtagError`` subclasses may escape (or the call succeeds with a
+result of the documented type); ``ScanFilter.feed`` may not raise at all. A
+completeness check makes sure a new public callable cannot skip the sweep.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+import tempfile
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import swarmtag.tag
+from swarmtag.errors import SwarmtagError
+from swarmtag.tag import (
+    Change,
+    FileStore,
+    MemoryStore,
+    Role,
+    ScanFilter,
+    TagModel,
+    TagRecord,
+    TagState,
+    TagStatus,
+    Write,
+    WriteSigner,
+    apply_change,
+    decode,
+    decode_manufacturer_data,
+    encode,
+    encode_manufacturer_data,
+    sign,
+    verify,
+)
+from tests.strategies import changes, tag_states
+
+KEY = bytes(range(16))
+MARKER = 12
+START = TagState(urgency=3, status=TagStatus.AWAITING_PICKUP, destination=0, marker=MARKER)
+
+writes = st.builds(
+    Write,
+    writer=st.integers(0, 0xFFFF),
+    role=st.sampled_from(Role),
+    counter=st.integers(0, 2**32 - 1),
+    target=st.sampled_from([MARKER, 0, 255]),
+    change=changes,
+)
+records = st.builds(
+    TagRecord,
+    state=tag_states,
+    counters=st.dictionaries(st.integers(0, 0xFFFF), st.integers(0, 2**32 - 1), max_size=3),
+)
+
+
+def _stored(record: TagRecord) -> MemoryStore:
+    store = MemoryStore()
+    store.save(record.to_bytes())
+    return store
+
+
+# Arbitrary values, plus valid objects of every kind so that calls reach past the first check.
+hostile = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(),
+    st.sampled_from([-1, 10, 256, 2**16, 2**32, 2**64, 10**5000, -(10**5000)]),
+    st.floats(),  # nan and infinities included
+    st.text(max_size=24),
+    st.binary(max_size=24),
+    st.builds(bytearray, st.binary(max_size=24)),
+    st.builds(memoryview, st.binary(max_size=24)),
+    st.lists(st.integers(-300, 300), max_size=24),
+    st.dictionaries(
+        st.integers(-1, 0x10000) | st.text(max_size=3),
+        st.binary(max_size=6) | st.integers() | st.none(),
+        max_size=3,
+    ),
+    st.builds(Counter, st.dictionaries(st.text(max_size=4), st.integers(), max_size=2)),
+    st.builds(Path, st.text(max_size=12)),
+    st.sampled_from(TagStatus),
+    st.sampled_from(Role),
+    st.just(KEY),
+    tag_states,
+    changes,
+    writes,
+    records,
+    writes.map(lambda write: sign(write, KEY)),  # authentic 20-byte writes
+    tag_states.map(encode),  # valid advertisements
+    tag_states.map(encode_manufacturer_data),
+    st.builds(MemoryStore),
+    records.map(_stored),
+)
+
+
+def _apply(message: object) -> TagState:
+    """Apply to a fresh tag; a refusal must leave state, counters and store as they were."""
+    store = MemoryStore()
+    tag = TagModel.provision(START, site_key=KEY, store=store)
+    before = store.load()
+    try:
+        return tag.apply(message)
+    except SwarmtagError:
+        assert (tag.state, dict(tag.counters), store.load()) == (START, {}, before)
+        raise
+
+
+def _file_store(path: object) -> FileStore:
+    """Construct in a scratch folder, so relative paths touch nothing real."""
+    with tempfile.TemporaryDirectory() as folder, contextlib.chdir(folder):
+        return FileStore(path)
+
+
+def _file_store_save(record: object) -> None:
+    with tempfile.TemporaryDirectory() as folder:
+        store = FileStore(Path(folder) / "tag.bin")
+        store.save(record)
+        assert store.load() == bytes(record)
+
+
+def _signer_sign(target: object, change: object) -> bytes:
+    signer = WriteSigner(writer=1, role=Role.OPERATOR, key=KEY)
+    try:
+        return signer.sign(target, change)
+    except SwarmtagError:
+        assert signer.counter == -1  # a refused argument does not use up a counter
+        raise
+
+
+# name -> (call taking positional arguments, number of arguments, type of a successful result)
+TARGETS: dict[str, tuple[Callable[..., object], int, type | tuple[type, ...]]] = {
+    "Change": (lambda u, s, d: Change(urgency=u, status=s, destination=d), 3, Change),
+    "FileStore": (_file_store, 1, FileStore),
+    "FileStore.save": (_file_store_save, 1, type(None)),
+    "MemoryStore.save": (lambda r: MemoryStore().save(r), 1, type(None)),
+    "Role": (Role, 1, Role),
+    "ScanFilter": (lambda a, f, e: ScanFilter(accepted=a, foreign=f, errors=e), 3, ScanFilter),
+    "ScanFilter.feed": (lambda data: ScanFilter().feed(data), 1, (TagState, type(None))),
+    "TagModel": (lambda r, k, s: TagModel(r, site_key=k, store=s), 3, TagModel),
+    "TagModel.apply": (_apply, 1, TagState),
+    "TagModel.boot": (lambda k, s: TagModel.boot(site_key=k, store=s), 2, TagModel),
+    "TagModel.provision": (
+        lambda st_, k, s: TagModel.provision(st_, site_key=k, store=s),
+        3,
+        TagModel,
+    ),
+    "TagRecord": (lambda s, c: TagRecord(state=s, counters=c), 2, TagRecord),
+    "TagRecord.from_bytes": (TagRecord.from_bytes, 1, TagRecord),
+    "TagState": (
+        lambda u, s, d, m: TagState(urgency=u, status=s, destination=d, marker=m),
+        4,
+        TagState,
+    ),
+    "TagStatus": (TagStatus, 1, TagStatus),
+    "TagStatus.parse": (TagStatus.parse, 1, TagStatus),
+    "Write": (
+        lambda w, r, n, t, c: Write(writer=w, role=r, counter=n, target=t, change=c),
+        5,
+        Write,
+    ),
+    "WriteSigner": (
+        lambda w, r, k, n: WriteSigner(writer=w, role=r, key=k, counter=n),
+        4,
+        WriteSigner,
+    ),
+    "WriteSigner.sign": (_signer_sign, 2, bytes),
+    "apply_change": (apply_change, 3, TagState),
+    "decode": (decode, 1, TagState),
+    "decode_manufacturer_data": (decode_manufacturer_data, 1, TagState),
+    "encode": (encode, 1, bytes),
+    "encode_manufacturer_data": (encode_manufacturer_data, 1, dict),
+    "sign": (sign, 2, bytes),
+    "verify": (verify, 2, Write),
+}
+
+NOT_SWEPT = {
+    "MemoryStore": "takes no arguments",
+    "TagStore": "a typing.Protocol: describes stores, is never called",
+    "TagStore.save": "a Protocol method without a body",
+}
+
+
+def _public_callables() -> set[str]:
+    """Public callables of swarmtag.tag and the public methods (with parameters) of its classes."""
+    names = set()
+    for name in swarmtag.tag.__all__:
+        value = getattr(swarmtag.tag, name)
+        if not callable(value):
+            continue
+        names.add(name)
+        if not isinstance(value, type):
+            continue
+        for attr, member in vars(value).items():
+            function = getattr(member, "__func__", member)
+            if attr.startswith("_") or not inspect.isfunction(function):
+                continue
+            if len(inspect.signature(function).parameters) > 1:  # beyond self / cls
+                names.add(f"{name}.{attr}")
+    return names
+
+
+def test_every_public_callable_is_swept():
+    assert _public_callables() == set(TARGETS) | set(NOT_SWEPT)
+    assert {"TagModel.apply", "WriteSigner.sign", "TagStatus.parse"} <= set(TARGETS)
+
+
+@pytest.mark.parametrize("name", sorted(TARGETS))
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_only_swarmtag_errors_escape(name, data):
+    call, arity, result_type = TARGETS[name]
+    args = data.draw(st.tuples(*[hostile] * arity), label="args")
+    try:
+        result = call(*args)
+    except SwarmtagError:
+        assert name != "ScanFilter.feed", "ScanFilter.feed must never raise"
+        return
+    assert isinstance(result, result_type)
+    if name == "encode":
+        assert len(result) == 6
+    if name in {"sign", "WriteSigner.sign"}:
+        assert len(result) == 20
