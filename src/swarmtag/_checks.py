@@ -25,12 +25,25 @@ __all__ = [
     "check_int",
     "check_number",
     "check_probability",
+    "show",
 ]
 
 MAX_SEED: Final = 2**63 - 1
 """Largest master seed: a seed is stored as a signed 64-bit integer (results store, logs)."""
 MAX_RUN_INDEX: Final = 2**53
 """Largest global run index (run offset plus runs): run ids stay exact in float64 columns."""
+
+
+def show(value: object) -> str:
+    """``repr(value)`` cut to 60 characters; a huge integer by its size (repr would fail).
+
+    >>> show(10**5000), show("x" * 100)[-4:]
+    ('an integer of about 5000 digits', "...'")
+    """
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
+        return f"an integer of about {round(value.bit_length() * math.log10(2))} digits"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "...'"
 
 
 def _describe_number(low: float | None, high: float | None, *, low_open: bool) -> str:
@@ -62,7 +75,7 @@ def check_number(
     """
     allowed = _describe_number(low, high, low_open=low_open)
     if isinstance(value, bool) or not isinstance(value, Real):
-        msg = f"{name}: {value!r} is not {allowed}"
+        msg = f"{name}: {show(value)} is not {allowed}"
         raise error(msg)
     number = float(value)
     ok = math.isfinite(number)
@@ -71,7 +84,7 @@ def check_number(
     if ok and high is not None:
         ok = number <= high
     if not ok:
-        msg = f"{name}: {value!r} is not {allowed}"
+        msg = f"{name}: {show(value)} is not {allowed}"
         raise error(msg)
     return number + 0.0  # -0.0 becomes 0.0
 
@@ -106,11 +119,11 @@ def check_int(
     """
     allowed = f"an integer >= {low}" if high is None else f"an integer in {low}-{high}"
     if isinstance(value, bool) or not isinstance(value, Integral):
-        msg = f"{name}: {value!r} is not {allowed}"
+        msg = f"{name}: {show(value)} is not {allowed}"
         raise error(msg)
     number = int(value)
     if number < low or (high is not None and number > high):
-        msg = f"{name}: {value!r} is not {allowed}"
+        msg = f"{name}: {show(value)} is not {allowed}"
         raise error(msg)
     return number
 
@@ -129,7 +142,7 @@ def check_choice(
     """
     if isinstance(value, str) and value.strip().lower() in choices:
         return value.strip().lower()
-    msg = f"{name}: {value!r} is not one of {', '.join(choices)}"
+    msg = f"{name}: {show(value)} is not one of {', '.join(choices)}"
     raise error(msg)
 
 
@@ -143,5 +156,5 @@ def check_bool(name: str, value: object, *, error: type[SwarmtagError] = ConfigE
     """
     if isinstance(value, bool):
         return value
-    msg = f"{name}: {value!r} is not true or false"
+    msg = f"{name}: {show(value)} is not true or false"
     raise error(msg)

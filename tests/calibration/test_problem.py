@@ -38,7 +38,10 @@ def test_layers_profile_then_set_then_free_then_setup():
         ("ticks=100:900", "set-up 'tiny' of tiny.toml sets it"),
         ("perception=1:2", "the setting is not a number ('disc')"),
         ("motion.avoid_taken_faces=0:1", "the setting is not a number (False)"),
-        ("tick=-0.1:0.2", "LO = -0.1 is refused in set-up 'tiny' (tick: -0.1 is not a number > 0)"),
+        (
+            "tick=-0.1:0.2",
+            "LO = -0.1 is refused in set-up 'tiny' (tick: -0.1 is not a number in [1e-06, 3600])",
+        ),
         ("realism.breakdown=0:2", "HI = 2 is refused in set-up 'tiny'"),
     ],
 )

@@ -50,7 +50,7 @@ def test_explicit_flags_and_set_win_over_the_profile(capsys):
         (["--profile", "nope"], "no such shipped profile"),
         (["--set", "camera.rnage=2"], "camera.rnage: unknown key"),
         (["--set", "nothing"], "is not KEY=VALUE"),
-        (["--set", "camera.range=-1"], "camera.range: -1 is not a number > 0"),
+        (["--set", "camera.range=-1"], "camera.range: -1 is not a number in (0, 100000]"),
     ],
 )
 def test_bad_profile_or_setting_is_one_line_and_exit_2(capsys, argv, message):

@@ -52,7 +52,7 @@ def test_a_profile_file_by_path(tmp_path: Path):
         ("tick = 0.05\n", r"\[profile\] with name"),
         ('[profile]\nname = "x"\ncolour = 1\n', r"profile\.colour: unknown key"),
         ('[profile]\nname = "x"\n[camera]\nrang = 1\n', r"camera\.rang: unknown key"),
-        ('tick = -1.0\n[profile]\nname = "x"\n', r"tick: -1\.0 is not a number > 0"),
+        ('tick = -1.0\n[profile]\nname = "x"\n', r"tick: -1\.0 is not a number in \[1e-06, 3600\]"),
     ],
 )
 def test_bad_profile_files_are_refused_naming_file_and_key(tmp_path, text, message):

@@ -86,5 +86,5 @@ def test_unit_vectors():
 
 
 def test_bad_seed_is_refused():
-    with pytest.raises(ConfigError, match="seed: -1 is not an integer >= 0"):
+    with pytest.raises(ConfigError, match="seed: -1 is not an integer in 0-9223372036854775807"):
         RandomSource(make_params(Scenario(), Proximity()), seed=-1, run_ids=[0])

@@ -2,11 +2,33 @@
 
 Each command group lives in its own module; ``_main`` assembles them and turns
 every refusal (bad input, usage errors of the CLI framework) into one line on
-stderr and exit status 2.
+stderr and exit status 2, and Ctrl-C into ``swarmtag: error: aborted`` and 130.
+This module stays import-light so that Ctrl-C is handled from the first
+moment: the commands (numpy, click, ...) are imported inside ``main``.
 """
 
 from __future__ import annotations
 
-from swarmtag.cli._main import app, main
+import sys
+import typing
 
-__all__ = ["app", "main"]
+if typing.TYPE_CHECKING:
+    from collections.abc import Sequence
+
+__all__ = ["main"]
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Run the command line (see ``swarmtag --help``); exits with 0, 2 or 130."""
+    from swarmtag._interrupt import install  # noqa: PLC0415 - before the heavy imports
+
+    restore = install()
+    try:
+        try:
+            from swarmtag.cli._main import run  # noqa: PLC0415 - numpy, click, rich load here
+        except KeyboardInterrupt:
+            print("swarmtag: error: aborted", file=sys.stderr)
+            sys.exit(130)
+        run(argv)
+    finally:
+        restore()

@@ -8,6 +8,7 @@ from collections.abc import Sequence
 import click
 
 from swarmtag import __version__
+from swarmtag._interrupt import checkpoint
 from swarmtag.cli.calibrate import calibrate_cmd
 from swarmtag.cli.demo import demo
 from swarmtag.cli.metrics import metrics
@@ -17,13 +18,30 @@ from swarmtag.cli.study import reproduce, study
 from swarmtag.cli.tag import tag
 from swarmtag.errors import SwarmtagError
 
-__all__ = ["EXIT_BAD_INPUT", "app", "main"]
+__all__ = ["EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "app", "run"]
 
 EXIT_BAD_INPUT = 2
 """Exit status for every refused input, ours or the CLI framework's."""
+EXIT_INTERRUPTED = 130
+"""Exit status after Ctrl-C (128 + SIGINT), as shells report it."""
+
+
+class _Interrupted(Exception):
+    """Ctrl-C inside a command, carried past click (which would print a blank line first)."""
+
+
+class _Root(click.Group):
+    """The root group: a KeyboardInterrupt in any command leaves as ``_Interrupted``."""
+
+    def invoke(self, ctx: click.Context) -> object:
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            raise _Interrupted from None
 
 
 @click.group(
+    cls=_Root,
     context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.version_option(__version__, prog_name="swarmtag")
@@ -50,10 +68,18 @@ def _fail(message: str, status: int) -> None:
     sys.exit(status)
 
 
-def main(argv: Sequence[str] | None = None) -> None:
-    """Run the command line; exit 0 on success, 2 with one line on stderr on bad input."""
+def run(argv: Sequence[str] | None = None) -> None:
+    """Run the command line: exit 0, 2 with one line on stderr on bad input, 130 on Ctrl-C.
+
+    ``swarmtag.cli.main`` installs the SIGINT handler before calling this.
+    """
     try:
-        result = app.main(args=argv, prog_name="swarmtag", standalone_mode=False)
+        try:
+            result = app.main(args=argv, prog_name="swarmtag", standalone_mode=False)
+        finally:
+            checkpoint()  # an interrupt swallowed on the way out still ends as one
+    except (_Interrupted, KeyboardInterrupt, click.Abort):
+        _fail("aborted", EXIT_INTERRUPTED)
     except click.exceptions.NoArgsIsHelpError as error:
         # A bare group prints its help, as a user asking "what is here?" expects.
         click.echo(error.ctx.get_help() if error.ctx else error.format_message())
@@ -63,8 +89,6 @@ def main(argv: Sequence[str] | None = None) -> None:
         _fail(error.format_message() + hint, EXIT_BAD_INPUT)
     except click.ClickException as error:
         _fail(error.format_message(), EXIT_BAD_INPUT)
-    except click.Abort:
-        _fail("aborted", 130)
     except SwarmtagError as error:
         _fail(str(error), EXIT_BAD_INPUT)
     sys.exit(result if isinstance(result, int) else 0)

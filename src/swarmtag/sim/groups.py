@@ -21,6 +21,10 @@ from swarmtag.errors import ConfigError
 
 __all__ = [
     "LAB_CARRIERS",
+    "MAX_DURATION",
+    "MAX_LENGTH",
+    "MAX_SPEED",
+    "MAX_TICKS",
     "URGENCY_MODELS",
     "Arena",
     "Bodies",
@@ -37,6 +41,15 @@ URGENCY_MODELS: Final = ("growing", "static")
 LAB_CARRIERS: Final = 7
 """Carriers of the published lab set-up, whose arena is the reference for scaling."""
 _LAB_SIDE: Final = 3.75
+MAX_LENGTH: Final = 1e5
+"""Largest length in metres (arena, ranges, bodies): 100 km, far beyond any warehouse."""
+MAX_DURATION: Final = 1e7
+"""Largest duration in seconds (timings, memory, horizons): about 116 days."""
+MAX_SPEED: Final = 100.0
+"""Largest speed in m/s and turn rate / 100 in degrees per second."""
+MAX_TICKS: Final = 10**8
+"""Most ticks of any run length or duration in ticks (with at least 100 us of work per tick,
+a run of 10^8 ticks already takes hours)."""
 
 
 def seconds_to_ticks(seconds: float, tick: float) -> int:
@@ -63,9 +76,13 @@ class Arena:
 
     def __post_init__(self) -> None:
         for name in ("size", "pickup_width", "dropoff_width"):
-            value = check_number(f"arena.{name}", getattr(self, name), low=0.0, low_open=True)
+            value = check_number(
+                f"arena.{name}", getattr(self, name), low=0.0, low_open=True, high=MAX_LENGTH
+            )
             object.__setattr__(self, name, value)
-        spacing = check_number("arena.carrier_spacing", self.carrier_spacing, low=0.0)
+        spacing = check_number(
+            "arena.carrier_spacing", self.carrier_spacing, low=0.0, high=MAX_LENGTH
+        )
         object.__setattr__(self, "carrier_spacing", spacing)
         if self.pickup_width + self.dropoff_width > self.size:
             msg = (
@@ -107,7 +124,9 @@ class Bodies:
 
     def __post_init__(self) -> None:
         for name in ("robot_diameter", "carrier_size"):
-            value = check_number(f"bodies.{name}", getattr(self, name), low=0.0, low_open=True)
+            value = check_number(
+                f"bodies.{name}", getattr(self, name), low=0.0, low_open=True, high=MAX_LENGTH
+            )
             object.__setattr__(self, name, value)
 
 
@@ -139,18 +158,22 @@ class Motion:
     def __post_init__(self) -> None:
         avoid = check_bool("motion.avoid_taken_faces", self.avoid_taken_faces)
         object.__setattr__(self, "avoid_taken_faces", avoid)
-        names = (
-            "speed",
-            "turn_rate",
-            "predock_distance",
-            "arrival_tolerance",
-            "stuck_time",
-            "sidestep_time",
-        )
-        for name in names:
-            value = check_number(f"motion.{name}", getattr(self, name), low=0.0, low_open=True)
+        highs = {
+            "speed": MAX_SPEED,
+            "turn_rate": MAX_SPEED * 100,
+            "predock_distance": MAX_LENGTH,
+            "arrival_tolerance": MAX_LENGTH,
+            "stuck_time": MAX_DURATION,
+            "sidestep_time": MAX_DURATION,
+        }
+        for name, high in highs.items():
+            value = check_number(
+                f"motion.{name}", getattr(self, name), low=0.0, low_open=True, high=high
+            )
             object.__setattr__(self, name, value)
-        iterations = check_int("motion.collision_iterations", self.collision_iterations, low=1)
+        iterations = check_int(
+            "motion.collision_iterations", self.collision_iterations, low=1, high=1000
+        )
         object.__setattr__(self, "collision_iterations", iterations)
 
 
@@ -169,7 +192,9 @@ class Walk:
     turn_angle: float = 180.0
 
     def __post_init__(self) -> None:
-        interval = check_number("walk.turn_interval", self.turn_interval, low=0.0)
+        interval = check_number(
+            "walk.turn_interval", self.turn_interval, low=0.0, high=MAX_DURATION
+        )
         object.__setattr__(self, "turn_interval", interval)
         angle = check_number("walk.turn_angle", self.turn_angle, low=0.0, high=180.0)
         object.__setattr__(self, "turn_angle", angle)
@@ -192,10 +217,14 @@ class Timing:
 
     def __post_init__(self) -> None:
         for name in ("dock", "lift", "release", "cooldown"):
-            value = check_number(f"timing.{name}", getattr(self, name), low=0.0)
+            value = check_number(f"timing.{name}", getattr(self, name), low=0.0, high=MAX_DURATION)
             object.__setattr__(self, name, value)
         timeout = check_number(
-            "timing.pursuit_timeout", self.pursuit_timeout, low=0.0, low_open=True
+            "timing.pursuit_timeout",
+            self.pursuit_timeout,
+            low=0.0,
+            low_open=True,
+            high=MAX_DURATION,
         )
         object.__setattr__(self, "pursuit_timeout", timeout)
 
@@ -215,10 +244,12 @@ class UrgencyModel:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "model", check_choice("urgency.model", self.model, URGENCY_MODELS))
-        limit = check_int("urgency.static_time_limit", self.static_time_limit, low=1)
+        limit = check_int(
+            "urgency.static_time_limit", self.static_time_limit, low=1, high=MAX_TICKS
+        )
         object.__setattr__(self, "static_time_limit", limit)
         horizon = check_number(
-            "urgency.static_horizon", self.static_horizon, low=0.0, low_open=True
+            "urgency.static_horizon", self.static_horizon, low=0.0, low_open=True, high=MAX_DURATION
         )
         object.__setattr__(self, "static_horizon", horizon)
 
@@ -250,9 +281,13 @@ class Realism:
             raise ConfigError(msg)
         object.__setattr__(self, "advertisement_loss", loss)
         object.__setattr__(
-            self, "status_delay", check_int("realism.status_delay", self.status_delay, low=0)
+            self,
+            "status_delay",
+            check_int("realism.status_delay", self.status_delay, low=0, high=MAX_TICKS),
         )
-        noise = check_number("realism.detection_noise", self.detection_noise, low=0.0)
+        noise = check_number(
+            "realism.detection_noise", self.detection_noise, low=0.0, high=MAX_LENGTH
+        )
         object.__setattr__(self, "detection_noise", noise)
         variation = check_number("realism.speed_variation", self.speed_variation, low=0, high=1)
         object.__setattr__(self, "speed_variation", variation)
@@ -283,7 +318,8 @@ class Reprioritisation:
     urgency: int
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "tick", check_int("reprioritisations.tick", self.tick, low=1))
+        tick = check_int("reprioritisations.tick", self.tick, low=1, high=MAX_TICKS)
+        object.__setattr__(self, "tick", tick)
         carrier = check_int("reprioritisations.carrier", self.carrier, low=0, high=255)
         object.__setattr__(self, "carrier", carrier)
         urgency = check_int("reprioritisations.urgency", self.urgency, low=0, high=9)

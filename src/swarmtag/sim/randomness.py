@@ -38,7 +38,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from swarmtag._checks import check_int
+from swarmtag._checks import MAX_SEED, check_int
 from swarmtag.errors import ConfigError
 from swarmtag.sim.geometry import Float, length
 from swarmtag.sim.params import Params
@@ -62,8 +62,8 @@ class Stream(IntEnum):
 
 
 def check_seed(seed: object) -> int:
-    """A master seed: an integer >= 0 (what ``numpy.random.SeedSequence`` accepts)."""
-    return check_int("seed", seed, low=0)
+    """A master seed: an integer in 0 .. 2**63 - 1 (stored as int64 in logs and the store)."""
+    return check_int("seed", seed, low=0, high=MAX_SEED)
 
 
 def stream(seed: int, run: int, purpose: Stream) -> np.random.Generator:

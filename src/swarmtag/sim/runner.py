@@ -14,7 +14,9 @@ from typing import Protocol
 
 import numpy as np
 
-from swarmtag._checks import check_int
+from swarmtag._checks import MAX_RUN_INDEX, check_int
+from swarmtag._interrupt import checkpoint
+from swarmtag._resources import check_memory
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable
 from swarmtag.policy import Policy
@@ -30,7 +32,15 @@ from swarmtag.sim.trajectories import Trajectories, TrajectoryRecorder
 from swarmtag.sim.wms import Operator
 from swarmtag.tag import TagStatus
 
-__all__ = ["InputSource", "SimResult", "carrier_log", "run_batch", "seeded_state", "simulate"]
+__all__ = [
+    "InputSource",
+    "SimResult",
+    "batch_memory",
+    "carrier_log",
+    "run_batch",
+    "seeded_state",
+    "simulate",
+]
 
 
 class InputSource(Protocol):
@@ -117,6 +127,7 @@ def run_batch(
     breakdowns = np.zeros(state.runs, dtype=np.int64)
     recorder = TrajectoryRecorder(state, limit) if record else None
     for _ in range(limit):
+        checkpoint()  # a Ctrl-C that numpy swallowed during the last tick ends the run here
         if (state.ended_at >= 0).all():
             break
         t = state.tick + 1
@@ -156,11 +167,32 @@ def run_batch(
     )
 
 
+def batch_memory(scenario: Scenario, runs: int, *, record: bool = False) -> float:
+    """Estimated peak bytes of simulating ``runs`` runs of ``scenario`` in one batch.
+
+    Fitted to tracemalloc peaks (docs/reliability.md): the carrier-carrier
+    line-of-sight tests (~650 B per pair), the robot-robot broad phase
+    (~75-200 B per pair), robot-carrier distances, per-body state, the
+    advertisement delay buffer and, when recording, every tick's poses.
+    """
+    robots, carriers = scenario.robots, scenario.carriers
+    per_run = (
+        700.0 * carriers**2
+        + 100.0 * robots**2
+        + 64.0 * robots * carriers
+        + 2000.0 * (robots + carriers)
+        + 24.0 * (scenario.realism.status_delay + 1) * carriers
+    )
+    if record:
+        per_run += 48.0 * scenario.run_ticks * (robots + carriers)
+    return runs * per_run
+
+
 def seeded_state(params: Params, *, seed: int, runs: int, run_offset: int = 0) -> WorldState:
     """The start state of global runs ``run_offset .. run_offset + runs - 1`` of ``seed``."""
     seed = check_seed(seed)
-    runs = check_int("runs", runs, low=1)
-    run_offset = check_int("run_offset", run_offset, low=0)
+    runs = check_int("runs", runs, low=1, high=MAX_RUN_INDEX)
+    run_offset = check_int("run_offset", run_offset, low=0, high=MAX_RUN_INDEX - runs)
     run_ids = np.arange(run_offset, run_offset + runs, dtype=np.int64)
     scenes = [sample_scene(params, seed=seed, run=int(run)) for run in run_ids]
     return initial_state(params, scenes, run_ids)
@@ -191,6 +223,12 @@ def simulate(
     if not isinstance(checked, Scenario):
         msg = f"scenario: {checked!r} is not a Scenario"
         raise ConfigError(msg)
+    runs = check_int("runs", runs, low=1, high=MAX_RUN_INDEX)
+    check_memory(
+        f"{runs} runs of {scenario.robots} robots and {scenario.carriers} carriers",
+        batch_memory(scenario, runs, record=record),
+        error=ConfigError,
+    )
     params = make_params(scenario, policy)
     state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset)
     source = RandomSource(params, seed=seed, run_ids=state.run_ids)

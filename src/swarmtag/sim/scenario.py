@@ -25,6 +25,8 @@ from swarmtag._checks import check_choice, check_int, check_number
 from swarmtag.errors import ConfigError
 from swarmtag.sim._mapping import load_toml, scenario_fields, scenario_to_mapping
 from swarmtag.sim.groups import (
+    MAX_LENGTH,
+    MAX_TICKS,
     Arena,
     Bodies,
     Motion,
@@ -36,10 +38,17 @@ from swarmtag.sim.groups import (
 )
 from swarmtag.sim.sensors import PERCEPTION_MODELS, Camera, Radio
 
-__all__ = ["MAX_CARRIERS", "TIME_UNITS", "Scenario"]
+__all__ = ["MAX_CARRIERS", "MAX_ROBOTS", "MAX_TICK", "MIN_TICK", "TIME_UNITS", "Scenario"]
 
 MAX_CARRIERS: Final = 256
 """Marker ids are one byte on the wire (SPEC §2.1): carriers are numbered 0-255."""
+MAX_ROBOTS: Final = 10**7
+"""Most robots per run: memory, not the kernel, is the real limit (checked before a run)."""
+MIN_TICK: Final = 1e-6
+"""Shortest tick in seconds: advertising phases live on an integer-microsecond grid."""
+MAX_TICK: Final = 3600.0
+"""Longest tick in seconds."""
+_TIMING_FIELDS: Final = ("dock", "lift", "release", "pursuit_timeout", "cooldown")
 TIME_UNITS: Final = ("tick", "s")
 """``Scenario.time_unit``: event-log times in ticks, or in seconds of robot time."""
 
@@ -71,7 +80,7 @@ class Scenario:
     >>> Scenario(robots=0)
     Traceback (most recent call last):
     ...
-    swarmtag.errors.ConfigError: robots: 0 is not an integer >= 1
+    swarmtag.errors.ConfigError: robots: 0 is not an integer in 1-10000000
     """
 
     robots: int = 3
@@ -94,12 +103,16 @@ class Scenario:
     reprioritisations: tuple[Reprioritisation, ...] = ()
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "robots", check_int("robots", self.robots, low=1))
+        robots = check_int("robots", self.robots, low=1, high=MAX_ROBOTS)
+        object.__setattr__(self, "robots", robots)
         carriers = check_int("carriers", self.carriers, low=1, high=MAX_CARRIERS)
         object.__setattr__(self, "carriers", carriers)
-        object.__setattr__(self, "ticks", check_int("ticks", self.ticks, low=1))
-        object.__setattr__(self, "tick", check_number("tick", self.tick, low=0.0, low_open=True))
-        radius = check_number("detection_radius", self.detection_radius, low=0.0, low_open=True)
+        object.__setattr__(self, "ticks", check_int("ticks", self.ticks, low=1, high=MAX_TICKS))
+        tick = check_number("tick", self.tick, low=MIN_TICK, high=MAX_TICK)
+        object.__setattr__(self, "tick", tick)
+        radius = check_number(
+            "detection_radius", self.detection_radius, low=0.0, low_open=True, high=MAX_LENGTH
+        )
         object.__setattr__(self, "detection_radius", radius)
         perception = check_choice("perception", self.perception, PERCEPTION_MODELS)
         object.__setattr__(self, "perception", perception)
@@ -130,6 +143,7 @@ class Scenario:
                 msg = f"reprioritisations: {event!r} is not a Reprioritisation"
                 raise ConfigError(msg)
         object.__setattr__(self, "reprioritisations", events)
+        self._check_durations()
         self._check_geometry()
         self._check_events()
 
@@ -181,6 +195,25 @@ class Scenario:
         True
         """
         return scenario_to_mapping({f.name: getattr(self, f.name) for f in fields(self)})
+
+    def _check_durations(self) -> None:
+        """Every duration in seconds must be at most ``MAX_TICKS`` ticks long at this tick."""
+        durations = {
+            **{f"timing.{name}": getattr(self.timing, name) for name in _TIMING_FIELDS},
+            "motion.stuck_time": self.motion.stuck_time,
+            "motion.sidestep_time": self.motion.sidestep_time,
+            "walk.turn_interval": self.walk.turn_interval,
+            "camera.memory": self.camera.memory,
+            "radio.interval": self.radio.interval,
+            "urgency.static_horizon": self.urgency.static_horizon,
+        }
+        for name, seconds in durations.items():
+            if seconds / self.tick > MAX_TICKS:
+                msg = (
+                    f"{name}: {seconds:g} s is {seconds / self.tick:.3g} ticks of {self.tick:g} s;"
+                    f" durations may be at most {MAX_TICKS:.0e} ticks (use a longer tick)"
+                )
+                raise ConfigError(msg)
 
     def perception_summary(self) -> str:
         """One line on how robots perceive carriers, for headers and reports.

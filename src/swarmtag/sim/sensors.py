@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Final
 
 from swarmtag._checks import check_choice, check_number
+from swarmtag.sim.groups import MAX_DURATION, MAX_LENGTH
 
 __all__ = ["OCCLUSION_MODELS", "PERCEPTION_MODELS", "Camera", "Radio"]
 
@@ -45,9 +46,11 @@ class Radio:
     interval: float = 0.25
 
     def __post_init__(self) -> None:
-        value = check_number("radio.range", self.range, low=0.0, low_open=True)
+        value = check_number("radio.range", self.range, low=0.0, low_open=True, high=MAX_LENGTH)
         object.__setattr__(self, "range", value)
-        interval = check_number("radio.interval", self.interval, low=0.0, low_open=True)
+        interval = check_number(
+            "radio.interval", self.interval, low=0.0, low_open=True, high=MAX_DURATION
+        )
         object.__setattr__(self, "interval", interval)
 
 
@@ -67,9 +70,9 @@ class Camera:
     memory: float = 0.0
 
     def __post_init__(self) -> None:
-        value = check_number("camera.range", self.range, low=0.0, low_open=True)
+        value = check_number("camera.range", self.range, low=0.0, low_open=True, high=MAX_LENGTH)
         object.__setattr__(self, "range", value)
         occlusion = check_choice("camera.occlusion", self.occlusion, OCCLUSION_MODELS)
         object.__setattr__(self, "occlusion", occlusion)
-        memory = check_number("camera.memory", self.memory, low=0.0)
+        memory = check_number("camera.memory", self.memory, low=0.0, high=MAX_DURATION)
         object.__setattr__(self, "memory", memory)

@@ -1,0 +1,184 @@
+"""Every output of a command: checked before any work, written aside, moved into place together.
+
+One rule for all commands: a file output's folder must already exist (a
+mistyped folder is an error, never a new folder); the path must not be a
+folder or a special file; the folder must be writable (tested by creating
+the staging folder there, so it also holds for root and read-only mounts);
+no two outputs, and no output and input, may be the same file. A folder
+output (``--figures DIR``) may be created, but its parent must exist.
+
+Work writes each output under a hidden staging folder beside its target,
+with the target's own name (so formats chosen by suffix still work). Only
+when every output was written are they moved into place, with SIGINT held
+back for those few renames; any failure or Ctrl-C before that removes the
+staging folders and leaves the targets exactly as they were.
+
+>>> import tempfile, pathlib
+>>> folder = pathlib.Path(tempfile.mkdtemp())
+>>> plan = OutputPlan()
+>>> target = plan.file("--out", folder / "a.txt", suffixes=(".txt",))
+>>> with plan.writing() as stage:
+...     _ = stage.path(target).write_text("hello")
+>>> (folder / "a.txt").read_text(), sorted(p.name for p in folder.iterdir())
+('hello', ['a.txt'])
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import shutil
+import signal
+import stat
+import threading
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+from swarmtag.errors import OutputError, SwarmtagError
+
+__all__ = ["STAGING_PREFIX", "OutputPlan", "Stage"]
+
+STAGING_PREFIX = ".swarmtag-staging-"
+"""Name prefix of the hidden staging folders (removed on failure; left only by SIGKILL)."""
+
+
+def _key(path: Path) -> str:
+    """One spelling per file: the real folder plus the name (the file itself may not exist)."""
+    return str(Path(os.path.realpath(path.parent)) / path.name)
+
+
+class Stage:
+    """Where a command writes its outputs while it works: ``stage.path(target)``."""
+
+    def __init__(self, staged: dict[str, Path]) -> None:
+        self._staged = staged
+
+    def path(self, target: Path) -> Path:
+        """The staged path to write instead of ``target`` (a planned file or folder output)."""
+        try:
+            return self._staged[_key(target)]
+        except KeyError:
+            msg = f"{target}: not a planned output"  # a bug in the command, not bad input
+            raise OutputError(msg) from None
+
+
+class OutputPlan:
+    """The outputs of one command, checked when added, written by ``writing()``."""
+
+    def __init__(self, *, error: type[SwarmtagError] = OutputError) -> None:
+        self._error = error
+        self._files: dict[str, tuple[str, Path]] = {}
+        self._folders: dict[str, tuple[str, Path]] = {}
+        self._inputs: dict[str, tuple[str, Path]] = {}
+
+    def _fail(self, option: str, path: Path, reason: str) -> None:
+        msg = f"{option}: {str(path)!r} {reason}"
+        raise self._error(msg)
+
+    def _claim(self, option: str, path: Path) -> str:
+        """Refuse a path already named by another output or an input; else its key."""
+        key = _key(path)
+        for table in (self._files, self._folders, self._inputs):
+            if key in table:
+                other, _ = table[key]
+                what = "an input" if table is self._inputs else "an output"
+                self._fail(option, path, f"is also {what} ({other}); give each its own file")
+        return key
+
+    def _check_folder(self, option: str, path: Path, folder: Path) -> None:
+        if not folder.is_dir():
+            reason = "is not a folder" if folder.exists() else "does not exist"
+            self._fail(option, path, f"cannot be written: folder {str(folder)!r} {reason}")
+
+    def input(self, option: str, path: Path) -> None:
+        """Note an input file, so that no output overwrites it."""
+        self._inputs[_key(path)] = (option, path)
+
+    def file(self, option: str, path: Path, *, suffixes: Sequence[str] = ()) -> Path:
+        """Plan the file ``path`` for ``option``; refuse it now if it could not be written."""
+        if "\0" in str(path) or not str(path):
+            self._fail(option, path, "is not a valid path")
+        if suffixes and path.suffix.lower() not in suffixes:
+            self._fail(option, path, f"must end in {' or '.join(suffixes)}")
+        self._check_folder(option, path, path.parent)
+        try:
+            mode = path.stat().st_mode
+        except FileNotFoundError:
+            mode = None
+        except OSError as problem:
+            self._fail(option, path, f"cannot be checked ({problem.strerror})")
+        if mode is not None and stat.S_ISDIR(mode):
+            self._fail(option, path, "is a folder; give a file name")
+        if mode is not None and not stat.S_ISREG(mode):
+            self._fail(option, path, "is not a regular file (a FIFO, socket or device)")
+        self._files[self._claim(option, path)] = (option, path)
+        return path
+
+    def folder(self, option: str, path: Path) -> Path:
+        """Plan the folder ``path`` (created if missing; its parent must exist)."""
+        if "\0" in str(path) or not str(path):
+            self._fail(option, path, "is not a valid path")
+        if path.exists() and not path.is_dir():
+            self._fail(option, path, "is a file; give a folder")
+        if not path.exists():
+            self._check_folder(option, path, path.parent)
+        self._folders[self._claim(option, path)] = (option, path)
+        return path
+
+    def _staging_root(self, option: str, path: Path, folder: Path) -> Path:
+        root = folder / f"{STAGING_PREFIX}{secrets.token_hex(6)}"
+        try:
+            root.mkdir()
+        except OSError as problem:
+            reason = problem.strerror or "not writable"
+            self._fail(option, path, f"cannot be written: folder {str(folder)!r}: {reason}")
+        return root
+
+    @contextmanager
+    def writing(self) -> Iterator[Stage]:
+        """Stage every output; move all into place if the body succeeds, else remove them all."""
+        roots: dict[str, Path] = {}
+        staged: dict[str, Path] = {}
+        moves: list[tuple[Path, Path, bool]] = []
+        try:
+            planned = [(k, v, False) for k, v in self._files.items()]
+            planned += [(k, v, True) for k, v in self._folders.items()]
+            for key, (option, path), is_folder in planned:
+                where = os.path.realpath(path.parent)
+                if where not in roots:
+                    roots[where] = self._staging_root(option, path, path.parent)
+                temp = roots[where] / path.name
+                if is_folder:
+                    temp.mkdir()
+                staged[key] = temp
+                moves.append((temp, path, is_folder))
+            yield Stage(staged)
+            missing = [str(target) for temp, target, _ in moves if not temp.exists()]
+            if missing:  # a command that planned an output must write it
+                msg = f"not written: {', '.join(missing)}"
+                raise self._error(msg)
+            _commit(moves)
+        finally:
+            for root in roots.values():
+                shutil.rmtree(root, ignore_errors=True)
+
+
+def _commit(moves: Sequence[tuple[Path, Path, bool]]) -> None:
+    """Move the staged outputs into place with SIGINT held back (main thread only)."""
+    block = threading.current_thread() is threading.main_thread() and hasattr(
+        signal, "pthread_sigmask"
+    )
+    if block:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        for temp, target, is_folder in moves:
+            if not is_folder:
+                temp.replace(target)
+                continue
+            target.mkdir(exist_ok=True)
+            for item in sorted(temp.iterdir()):
+                item.replace(target / item.name)
+    finally:
+        if block:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
