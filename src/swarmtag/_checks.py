@@ -18,6 +18,7 @@ from typing import Final
 from swarmtag.errors import ConfigError, SwarmtagError
 
 __all__ = [
+    "MAX_RESAMPLES",
     "MAX_RUN_INDEX",
     "MAX_SEED",
     "check_bool",
@@ -30,6 +31,8 @@ __all__ = [
 
 MAX_SEED: Final = 2**63 - 1
 """Largest master seed: a seed is stored as a signed 64-bit integer (results store, logs)."""
+MAX_RESAMPLES: Final = 10**9
+"""Most bootstrap resamples any option or file accepts; memory is checked against the need first."""
 MAX_RUN_INDEX: Final = 2**53
 """Largest global run index (run offset plus runs): run ids stay exact in float64 columns."""
 

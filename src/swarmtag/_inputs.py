@@ -33,10 +33,10 @@ def regular_file(path: str | os.PathLike[str], *, what: str, error: type[Swarmta
         msg = f"{name}: cannot read the {what} ({reason})"
         raise error(msg) from None
     if stat.S_ISDIR(mode):
-        msg = f"{name}: is a folder, not a {what}"
+        msg = f"{name}: is a folder, not the {what}"
         raise error(msg)
     if not stat.S_ISREG(mode):
-        msg = f"{name}: is not a regular file (a FIFO, socket or device); give a {what} file"
+        msg = f"{name}: is not a regular file (a FIFO, socket or device); the {what} must be one"
         raise error(msg)
     if not os.access(path, os.R_OK):
         msg = f"{name}: cannot read the {what} (permission denied)"

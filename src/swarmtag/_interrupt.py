@@ -13,11 +13,15 @@ Without ``install()`` (library use) ``checkpoint()`` does nothing.
 from __future__ import annotations
 
 import signal
-import threading
-from collections.abc import Callable
-from types import FrameType
 
-__all__ = ["checkpoint", "install", "interrupted"]
+# Only signal at run time: ``swarmtag.cli.main`` imports this module first thing, and until
+# ``install()`` has run a Ctrl-C ends in a traceback.
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from collections.abc import Callable
+    from types import FrameType
+
+__all__ = ["checkpoint", "deferred", "install", "interrupted"]
 
 _state = {"pending": False}
 
@@ -33,9 +37,10 @@ def install() -> Callable[[], None]:
     Only the main thread may set signal handlers; elsewhere this does nothing.
     """
     _state["pending"] = False
-    if threading.current_thread() is not threading.main_thread():
+    try:
+        previous = signal.signal(signal.SIGINT, _handler)
+    except ValueError:  # not the main thread
         return lambda: None
-    previous = signal.signal(signal.SIGINT, _handler)
 
     def restore() -> None:
         signal.signal(signal.SIGINT, previous)
@@ -52,3 +57,34 @@ def checkpoint() -> None:
     """Raise ``KeyboardInterrupt`` if a SIGINT arrived, even one that something swallowed."""
     if _state["pending"]:
         raise KeyboardInterrupt
+
+
+class deferred:  # noqa: N801 - used as ``with deferred():``, like contextlib's helpers
+    """Hold Ctrl-C back for a short critical section; raise it when the section is done.
+
+    Swaps the SIGINT handler (masking the signal would not do: another thread
+    of the process may take it). Outside the main thread it only runs the body.
+    """
+
+    def __init__(self) -> None:
+        self._arrived: list[int] = []
+        self._previous: object = None
+        self._swapped = False
+
+    def __enter__(self) -> None:
+        try:
+            self._previous = signal.signal(signal.SIGINT, self._record)
+            self._swapped = True
+        except ValueError:  # not the main thread
+            self._swapped = False
+
+    def _record(self, signum: int, _frame: FrameType | None) -> None:
+        self._arrived.append(signum)
+
+    def __exit__(self, kind: object, value: object, traceback: object) -> None:
+        if not self._swapped:
+            return
+        signal.signal(signal.SIGINT, self._previous)  # type: ignore[arg-type]
+        if self._arrived and kind is None:
+            _state["pending"] = _state["pending"] or self._previous is _handler
+            raise KeyboardInterrupt

@@ -9,7 +9,7 @@ output (``--figures DIR``) may be created, but its parent must exist.
 
 Work writes each output under a hidden staging folder beside its target,
 with the target's own name (so formats chosen by suffix still work). Only
-when every output was written are they moved into place, with SIGINT held
+when every output was written are they moved into place, with Ctrl-C held
 back for those few renames; any failure or Ctrl-C before that removes the
 staging folders and leaves the targets exactly as they were.
 
@@ -28,13 +28,12 @@ from __future__ import annotations
 import os
 import secrets
 import shutil
-import signal
 import stat
-import threading
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
+from swarmtag._interrupt import deferred
 from swarmtag.errors import OutputError, SwarmtagError
 
 __all__ = ["STAGING_PREFIX", "OutputPlan", "Stage"]
@@ -132,7 +131,7 @@ class OutputPlan:
             root.mkdir()
         except OSError as problem:
             reason = problem.strerror or "not writable"
-            self._fail(option, path, f"cannot be written: folder {str(folder)!r}: {reason}")
+            self._fail(option, path, f"cannot be written in folder {str(folder)!r} ({reason})")
         return root
 
     @contextmanager
@@ -165,20 +164,16 @@ class OutputPlan:
 
 
 def _commit(moves: Sequence[tuple[Path, Path, bool]]) -> None:
-    """Move the staged outputs into place with SIGINT held back (main thread only)."""
-    block = threading.current_thread() is threading.main_thread() and hasattr(
-        signal, "pthread_sigmask"
-    )
-    if block:
-        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-    try:
+    """Move the staged outputs into place with Ctrl-C held back until all are there."""
+    with deferred():
         for temp, target, is_folder in moves:
             if not is_folder:
                 temp.replace(target)
                 continue
             target.mkdir(exist_ok=True)
-            for item in sorted(temp.iterdir()):
-                item.replace(target / item.name)
-    finally:
-        if block:
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+            for item in sorted(temp.rglob("*")):  # merged file by file into what is there
+                destination = target / item.relative_to(temp)
+                if item.is_dir():
+                    destination.mkdir(exist_ok=True)
+                else:
+                    item.replace(destination)

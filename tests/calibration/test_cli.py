@@ -165,7 +165,7 @@ def test_an_event_log_baseline_end_to_end(tmp_path, capsys):
         (["--set", "timing.dokk=2"], "--set: timing.dokk: unknown key"),
         (["--set", "timing.dock"], "--set: 'timing.dock' is not KEY=VALUE"),
         (["--condition", "proximity"], "--condition picks an event log's condition"),
-        (["--seed", "-3"], "--seed: -3 is not an integer >= 0"),
+        (["--seed", "-3"], "--seed: -3 is not an integer in 0-9223372036854775807"),
         (["--profile", "nope"], "profile 'nope': no such shipped profile"),
     ],
 )
@@ -196,9 +196,9 @@ def test_a_log_in_seconds_needs_a_profile_in_seconds(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("out", "report", "message"),
     [
-        ("missing/p.toml", None, "--out: folder '{tmp}/missing' does not exist"),
+        ("missing/p.toml", None, "folder '{tmp}/missing' does not exist"),
         ("p.json", None, "--out: '{tmp}/p.json' must end in .toml"),
-        ("p.toml", "missing/r.md", "--report: folder '{tmp}/missing' does not exist"),
+        ("p.toml", "missing/r.md", "folder '{tmp}/missing' does not exist"),
         ("p.toml", "r.txt", "--report: '{tmp}/r.txt' must end in .md"),
     ],
 )

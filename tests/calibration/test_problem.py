@@ -86,7 +86,7 @@ def test_time_units_must_agree():
     [
         ({"runs": 0}, "--runs: 0 is not an integer in 1-10000"),
         ({"runs": 10_001}, "--runs: 10001 is not an integer in 1-10000"),
-        ({"seed": -1}, "--seed: -1 is not an integer >= 0"),
+        ({"seed": -1}, "--seed: -1 is not an integer in 0-9223372036854775807"),
         ({"free": ()}, "no free parameters"),
     ],
 )

@@ -199,7 +199,8 @@ def test_markdown_into_missing_folder_is_refused_before_work(tmp_path, capsys):
         main(["metrics", str(example_trial_path()), "--markdown", str(tmp_path / "no" / "t.md")])
     err = capsys.readouterr().err
     assert exited.value.code == 2
-    assert "--markdown: folder" in err
+    assert err.startswith("swarmtag: error: --markdown: ")
+    assert "does not exist" in err
     assert list(tmp_path.iterdir()) == []
 
 

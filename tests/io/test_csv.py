@@ -236,7 +236,7 @@ def test_files(tmp_path):
 def test_file_problems(tmp_path):
     with pytest.raises(EventLogError, match=r"missing\.csv: no such file"):
         read_carrier_csv(tmp_path / "missing.csv")
-    with pytest.raises(EventLogError, match="is a folder, not a CSV event log"):
+    with pytest.raises(EventLogError, match="is a folder, not the CSV event log"):
         read_carrier_csv(tmp_path)
     latin = tmp_path / "latin.csv"
     latin.write_bytes(GOOD.replace("proximity", "proximit\xe9").encode("latin-1"))

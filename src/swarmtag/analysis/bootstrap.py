@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmtag._resources import check_memory
 from swarmtag.analysis._validation import check_options
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS
 from swarmtag.analysis.censoring import km_resampled_quantiles
@@ -37,6 +38,7 @@ from swarmtag.analysis.kpis import (
 )
 from swarmtag.analysis.resampling import (
     CHUNK_ELEMENTS,
+    bootstrap_memory,
     condition_generator,
     iter_multiplicities,
     resampled_percentiles,
@@ -154,6 +156,11 @@ def _replicates(
 ) -> tuple[dict[str, NDArray[np.float64]], NDArray[np.float64], NDArray[np.float64]]:
     """Bootstrap values of every metric ``(B,)``, of the PA curve and of the latency curve.
 
+    The curves' values come as ``(B, K)`` views of ``(K, B)`` arrays, so that
+    each point's ``B`` values are contiguous for its band. Resamples are
+    drawn and evaluated chunk by chunk (``iter_multiplicities``): only the
+    ``B`` values per figure are ever stored, each exactly once.
+
     Columns of the per-run sums: latency sum, deliveries, throughput and
     whether defined, PA, censored latency sum, carriers, PA at delivery and
     whether defined, then the PA curve.
@@ -178,9 +185,9 @@ def _replicates(
     ).astype(np.float64)
     percentiles = [95, *curve_percentiles]
     names = METRICS + OPTIONAL_METRICS
-    metrics = np.empty((n_resamples, len(names)))
-    pa_curve = np.empty((n_resamples, len(curve_thresholds)))
-    latency_curve = np.empty((n_resamples, len(curve_percentiles)))
+    metrics = [np.empty(n_resamples) for _ in names]  # one array each: kept, never copied
+    pa_curve = np.empty((len(curve_thresholds), n_resamples))
+    latency_curve = np.empty((len(curve_percentiles), n_resamples))
     latencies = values.latencies
     censored = values.censored
     rng = condition_generator(seed, values.condition)
@@ -196,26 +203,24 @@ def _replicates(
         stop = start + len(weights)
         sums = weights.astype(np.float64) @ per_run
         pooled = resampled_percentiles(latencies.values, latencies.runs, weights, percentiles)
-        metrics[start:stop, 0] = pooled[:, 0]
-        metrics[start:stop, 1] = _ratio(sums[:, 0], sums[:, 1])
-        metrics[start:stop, 2] = _ratio(sums[:, 2], sums[:, 3])
-        metrics[start:stop, 3] = sums[:, 4] / n_runs
-        metrics[start:stop, 4] = sums[:, 1] / n_runs
-        metrics[start:stop, 5] = resampled_percentiles(
+        metrics[0][start:stop] = pooled[:, 0]
+        metrics[1][start:stop] = _ratio(sums[:, 0], sums[:, 1])
+        metrics[2][start:stop] = _ratio(sums[:, 2], sums[:, 3])
+        metrics[3][start:stop] = sums[:, 4] / n_runs
+        metrics[4][start:stop] = sums[:, 1] / n_runs
+        metrics[5][start:stop] = resampled_percentiles(
             censored.values, censored.runs, weights, [95]
         )[:, 0]
-        metrics[start:stop, 6] = _ratio(sums[:, 5], sums[:, 6])
-        metrics[start:stop, 7] = km_resampled_quantiles(censored, weights, 95)
-        metrics[start:stop, 8] = _ratio(sums[:, 7], sums[:, 8])
-        pa_curve[start:stop] = sums[:, 9:] / n_runs
-        latency_curve[start:stop] = pooled[:, 1:]
+        metrics[6][start:stop] = _ratio(sums[:, 5], sums[:, 6])
+        metrics[7][start:stop] = km_resampled_quantiles(censored, weights, 95)
+        metrics[8][start:stop] = _ratio(sums[:, 7], sums[:, 8])
+        pa_curve[:, start:stop] = (sums[:, 9:] / n_runs).T
+        latency_curve[:, start:stop] = pooled[:, 1:].T
         start = stop
-    by_metric = {}
-    for column, metric in enumerate(names):
-        replicate = np.ascontiguousarray(metrics[:, column])
+    for replicate in metrics:
         replicate.flags.writeable = False
-        by_metric[metric] = replicate
-    return by_metric, pa_curve, latency_curve
+    by_metric = dict(zip(names, metrics, strict=True))
+    return by_metric, pa_curve.T, latency_curve.T
 
 
 def condition_statistics(
@@ -243,6 +248,9 @@ def condition_statistics(
     >>> ci = stats.mean_latency.confidence_interval
     >>> 10.0 <= ci.low < 25.0 < ci.high <= 40.0
     True
+
+    A request that cannot fit in memory is refused before anything is drawn
+    (``swarmtag.errors.ResourceError``, see ``bootstrap_memory``).
     """
     check_options(
         n_resamples=n_resamples,
@@ -251,6 +259,35 @@ def condition_statistics(
         curve_thresholds=curve_thresholds,
         curve_percentiles=curve_percentiles,
     )
+    estimate = bootstrap_memory(
+        n_resamples,
+        conditions=1,
+        width=len(runs.carrier),
+        curve_points=len(curve_thresholds) + len(curve_percentiles),
+    )
+    check_memory(f"--resamples {n_resamples} over 1 condition", estimate)
+    return _statistics(
+        runs,
+        n_resamples=n_resamples,
+        seed=seed,
+        confidence_level=confidence_level,
+        curve_thresholds=curve_thresholds,
+        curve_percentiles=curve_percentiles,
+        chunk_elements=_chunk_elements,
+    )
+
+
+def _statistics(
+    runs: ConditionRuns,
+    *,
+    n_resamples: int,
+    seed: int,
+    confidence_level: float,
+    curve_thresholds: Sequence[int] = CURVE_THRESHOLDS,
+    curve_percentiles: Sequence[float] = LATENCY_PERCENTILES,
+    chunk_elements: int = CHUNK_ELEMENTS,
+) -> ConditionStatistics:
+    """``condition_statistics`` without its checks: for callers that checked (``summarize``)."""
     values = run_values(runs, curve_thresholds=curve_thresholds)
     kpis = condition_kpis(values)
     replicates, pa_replicates, latency_replicates = _replicates(
@@ -259,7 +296,7 @@ def condition_statistics(
         seed=seed,
         curve_thresholds=curve_thresholds,
         curve_percentiles=curve_percentiles,
-        chunk_elements=_chunk_elements,
+        chunk_elements=chunk_elements,
     )
     if kpis.km_p95_latency is None:  # the condition's own KM curve never reaches 0.95
         undefined = np.full(n_resamples, np.nan)

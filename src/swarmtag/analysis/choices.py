@@ -22,7 +22,9 @@ Per run, and per condition over its runs:
 
 The per-run means of double pursuits, timeouts, abandons and refused lifts
 get a bootstrap-over-runs interval from the same seeded generator as the
-KPIs (``swarmtag.analysis.resampling``): the same resampled runs.
+KPIs (``swarmtag.analysis.resampling``): the same resampled runs. They are
+drawn in bounded chunks, and a request that cannot fit in memory is refused
+before any is drawn.
 """
 
 from __future__ import annotations
@@ -34,9 +36,14 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._resources import check_memory
 from swarmtag.analysis._validation import check_options
 from swarmtag.analysis.bootstrap import Estimate, percentile_interval
-from swarmtag.analysis.resampling import condition_generator, iter_multiplicities
+from swarmtag.analysis.resampling import (
+    bootstrap_memory,
+    condition_generator,
+    iter_multiplicities,
+)
 from swarmtag.analysis.summary import JsonValue
 from swarmtag.errors import StatisticsError
 from swarmtag.io.tables import CarrierLog, EventTable
@@ -316,15 +323,18 @@ def _condition(
     counts.update({count: per_run(kind == label) for count, label in _COUNTED.items()})
     known, among, sums = _candidate_counts(events, rows, position, n_runs)
     table = np.column_stack([counts[name] for name in CHOICE_COUNTS]).astype(np.float64)
-    replicates = np.empty((n_resamples, len(CHOICE_COUNTS)))
+    replicates = [np.empty(n_resamples) for _ in CHOICE_COUNTS]  # kept, never copied
     start = 0
     rng = condition_generator(seed, name)
     for weights in iter_multiplicities(rng, n_runs, n_resamples, width=n_runs):
-        replicates[start : start + len(weights)] = weights @ table / n_runs
-        start += len(weights)
+        stop = start + len(weights)
+        means = weights @ table / n_runs
+        for column, replicate in enumerate(replicates):
+            replicate[start:stop] = means[:, column]
+        start = stop
     estimates = {}
     for column, count in enumerate(CHOICE_COUNTS):
-        values = np.ascontiguousarray(replicates[:, column])
+        values = replicates[column]
         values.flags.writeable = False
         estimates[count] = Estimate(
             value=float(table[:, column].mean()),
@@ -392,6 +402,16 @@ def choice_statistics(
         source = "the event table" if log is None else "the event log"
         msg = f"condition {empty[0]!r} has no runs in {source}"
         raise StatisticsError(msg)
+    estimate = bootstrap_memory(
+        n_resamples,
+        conditions=len(names),
+        width=max((run_ids[name].size for name in names), default=1),
+        metrics=len(CHOICE_COUNTS),
+        curve_points=0,
+        comparisons=0,
+    )
+    plural = "" if len(names) == 1 else "s"
+    check_memory(f"--resamples {n_resamples} over {len(names)} condition{plural}", estimate)
     return tuple(
         _condition(
             events,

@@ -11,6 +11,19 @@ first latency whose cumulative multiplicity exceeds ``i``. The result equals
 Each condition draws from its own generator, keyed by a digest of its name
 (not its position among the conditions present), so adding or removing a
 condition never changes another condition's resamples.
+
+Resamples are drawn and evaluated in chunks of at most ``CHUNK_ELEMENTS``
+(resamples x values) so no ``resamples x runs`` array ever exists; only the
+``B`` bootstrap values of each figure are kept. The draws do not depend on
+the chunking: ``Generator.integers`` with its default ``int64`` dtype takes
+every value from one continuing stream (for ``int64``/``int32`` and unsigned
+alike; only the 8- and 16-bit dtypes buffer within one call, so they must not
+be used here). Sums over the resampled runs are BLAS matrix products, whose
+last bits can depend on how many rows one product has: the chunk geometry
+(``CHUNK_ELEMENTS`` and the rows-per-chunk rule of ``iter_multiplicities``)
+is therefore part of the numeric results and must not change.
+``bootstrap_memory`` estimates what a bootstrap needs so that callers can
+refuse it (``swarmtag._resources.check_memory``) before anything is drawn.
 """
 
 from __future__ import annotations
@@ -22,9 +35,16 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag.analysis.alignment import CURVE_THRESHOLDS
+from swarmtag.analysis.curves import LATENCY_PERCENTILES
+from swarmtag.analysis.kpis import METRICS, OPTIONAL_METRICS
 from swarmtag.analysis.latency import interpolation_points, lerp
 
 __all__ = [
+    "CHUNK_ELEMENTS",
+    "PER_VALUE_ARRAYS",
+    "WORKING_ARRAYS",
+    "bootstrap_memory",
     "condition_generator",
     "condition_seed_sequence",
     "iter_multiplicities",
@@ -33,7 +53,68 @@ __all__ = [
 ]
 
 CHUNK_ELEMENTS: Final = 1 << 22
-"""Bound on (resamples in a chunk) x (runs or latencies): about 32 MiB per int64 array."""
+"""The chunk budget: (resamples in a chunk) x (runs or values), 32 MiB per int64 array.
+
+A chunk of this size takes well under a second, so an interrupt is handled
+promptly. Do not change it: the chunk sizes are part of the results' last
+bits (see the module docstring).
+"""
+WORKING_ARRAYS: Final = 12
+"""Most chunk-sized arrays alive at once while one chunk is evaluated (measured: 3 to 8)."""
+PER_VALUE_ARRAYS: Final = 32
+"""Float64 arrays per carrier (log row) of a condition: its per-run values, sorted latencies."""
+_FLOAT: Final = 8
+"""Bytes of one float64 bootstrap value."""
+_PERCENTILE_TEMPORARIES: Final = 3
+"""Per-resample float64 temporaries of a percentile interval: the defined values, numpy's
+partition copy, and the NaN masks."""
+
+
+def bootstrap_memory(
+    n_resamples: int,
+    *,
+    conditions: int,
+    width: int,
+    metrics: int = len(METRICS) + len(OPTIONAL_METRICS),
+    curve_points: int = len(CURVE_THRESHOLDS) + len(LATENCY_PERCENTILES),
+    comparisons: int | None = None,
+) -> int:
+    """Bytes a bootstrap of ``n_resamples`` over ``conditions`` conditions needs at its peak.
+
+    The defaults describe ``summarize``: ``metrics`` figures per condition,
+    ``curve_points`` curve values per resample, one comparison with the
+    baseline per other condition (``comparisons``, default ``conditions - 1``),
+    each with ``metrics`` bootstrap differences. ``width`` is the most values
+    one resample of a condition spans: the rows (carriers) of a condition's
+    log for the KPIs, its runs for choice statistics; any upper bound (the
+    log's length) will do.
+
+    Kept to the end: ``B`` float64 values per metric of every condition and of
+    every comparison (the percentile CIs and p-values need them all). On top
+    of these come, at one time, either the last condition's curve values or
+    the comparisons' differences; a percentile's temporaries; one chunk of at
+    most ``WORKING_ARRAYS`` arrays of ``CHUNK_ELEMENTS`` values (or of
+    ``width``, if one resample is wider); and the per-carrier bookkeeping.
+    Not counted: the interpreter and libraries (scipy.stats, loaded on first
+    use, takes about 85 MiB), which every command pays whatever it asks::
+
+        8 * B * (C * M + max(K, P * M) + 3)
+          + 8 * WORKING_ARRAYS * min(B * width, max(CHUNK_ELEMENTS, width))
+          + 8 * PER_VALUE_ARRAYS * C * width
+
+    >>> from swarmtag._resources import format_bytes
+    >>> format_bytes(bootstrap_memory(1_000_000_000, conditions=3, width=100))
+    '529.4 GiB'
+    >>> format_bytes(bootstrap_memory(10_000, conditions=2, width=100))
+    '96.3 MiB'
+    """
+    others = conditions - 1 if comparisons is None else comparisons
+    kept = conditions * metrics
+    transient = max(curve_points, others * metrics) + _PERCENTILE_TEMPORARIES
+    chunk = min(n_resamples * width, max(CHUNK_ELEMENTS, width))
+    bookkeeping = PER_VALUE_ARRAYS * conditions * width
+    per_request = n_resamples * (kept + transient) + WORKING_ARRAYS * chunk + bookkeeping
+    return _FLOAT * per_request
 
 
 def condition_seed_sequence(seed: int, condition: str) -> np.random.SeedSequence:
@@ -77,7 +158,9 @@ def iter_multiplicities(
 
     Chunks hold about ``chunk_elements / width`` resamples, where ``width``
     is the widest per-resample array the caller builds. The draws are the
-    same whatever the chunk size: the generator hands out one stream.
+    same whatever the chunk size: the generator hands out one stream (the
+    default ``int64`` dtype; the 8- and 16-bit ones would not, see the
+    module docstring).
     """
     rows = max(1, min(n_resamples, chunk_elements // max(1, width, n_runs)))
     done = 0

@@ -13,9 +13,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
-from swarmtag.analysis.bootstrap import ConditionStatistics, Estimate, condition_statistics
+from swarmtag._resources import check_memory
+from swarmtag.analysis._validation import check_options
+from swarmtag.analysis.bootstrap import ConditionStatistics, Estimate, _statistics
 from swarmtag.analysis.compare import Comparison, compare_all
 from swarmtag.analysis.kpis import CORE_METRICS
+from swarmtag.analysis.resampling import bootstrap_memory
 from swarmtag.analysis.runs import split_conditions
 from swarmtag.errors import StatisticsError
 from swarmtag.io.tables import CarrierLog
@@ -105,6 +108,10 @@ class MetricsReport:
         return {"conditions": conditions, "comparisons": comparisons}
 
 
+def _conditions(count: int) -> str:
+    return f"{count} condition" + ("" if count == 1 else "s")
+
+
 def summarize(
     log: CarrierLog,
     *,
@@ -122,12 +129,23 @@ def summarize(
     >>> report = summarize(log, n_resamples=100)
     >>> [(c.metric, c.diff) for c in report.comparisons][:2]
     [('p95_latency', -8.0), ('mean_latency', -8.0)]
+
+    What cannot fit in memory (``bootstrap_memory``: the bootstrap values
+    kept for every condition and comparison) is refused with a
+    ``swarmtag.errors.ResourceError`` before any resample is drawn.
     """
+    check_options(n_resamples=n_resamples, seed=seed, confidence_level=confidence_level)
     groups = split_conditions(log)
     chosen = choose_baseline(list(groups), baseline)
     order = [chosen, *(name for name in groups if name != chosen)]
+    estimate = bootstrap_memory(
+        n_resamples,
+        conditions=len(order),
+        width=max(len(runs.carrier) for runs in groups.values()),
+    )
+    check_memory(f"--resamples {n_resamples} over {_conditions(len(order))}", estimate)
     statistics = {
-        name: condition_statistics(
+        name: _statistics(
             groups[name], n_resamples=n_resamples, seed=seed, confidence_level=confidence_level
         )
         for name in order

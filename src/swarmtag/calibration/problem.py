@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Final
 
+from swarmtag._checks import MAX_SEED, check_int
 from swarmtag.calibration.free import FreeParameter
 from swarmtag.calibration.spec import MAX_RUNS, Setup, Targets
 from swarmtag.errors import CalibrationError, ConfigError
@@ -58,12 +59,9 @@ class CalibrationProblem:
     def __post_init__(self) -> None:
         if not self.free:
             raise CalibrationError("no free parameters: give --free NAME=LO:HI")
-        if self.runs is not None and (
-            isinstance(self.runs, bool) or not 1 <= self.runs <= MAX_RUNS
-        ):
-            raise CalibrationError(f"--runs: {self.runs!r} is not an integer in 1-{MAX_RUNS}")
-        if isinstance(self.seed, bool) or not 0 <= self.seed < 2**63:
-            raise CalibrationError(f"--seed: {self.seed!r} is not an integer >= 0")
+        if self.runs is not None:
+            check_int("--runs", self.runs, low=1, high=MAX_RUNS, error=CalibrationError)
+        check_int("--seed", self.seed, low=0, high=MAX_SEED, error=CalibrationError)
         try:
             Profile(name=self.profile.name, values=self.base_values)
         except ConfigError as error:

@@ -36,8 +36,8 @@ class _Root(click.Group):
     def invoke(self, ctx: click.Context) -> object:
         try:
             return super().invoke(ctx)
-        except KeyboardInterrupt:
-            raise _Interrupted from None
+        except KeyboardInterrupt as interrupt:
+            raise _Interrupted(str(interrupt)) from None
 
 
 @click.group(
@@ -78,8 +78,9 @@ def run(argv: Sequence[str] | None = None) -> None:
             result = app.main(args=argv, prog_name="swarmtag", standalone_mode=False)
         finally:
             checkpoint()  # an interrupt swallowed on the way out still ends as one
-    except (_Interrupted, KeyboardInterrupt, click.Abort):
-        _fail("aborted", EXIT_INTERRUPTED)
+    except (_Interrupted, KeyboardInterrupt, click.Abort) as interrupt:
+        note = str(interrupt) if isinstance(interrupt, _Interrupted) else ""
+        _fail("aborted" + (f"; {note}" if note else ""), EXIT_INTERRUPTED)
     except click.exceptions.NoArgsIsHelpError as error:
         # A bare group prints its help, as a user asking "what is here?" expects.
         click.echo(error.ctx.get_help() if error.ctx else error.format_message())

@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import click
 
-__all__ = ["baseline_option", "resamples_option"]
+from swarmtag._checks import MAX_RESAMPLES
+from swarmtag._resources import check_memory
+from swarmtag.analysis.resampling import bootstrap_memory
+from swarmtag.errors import StatisticsError
+
+__all__ = ["baseline_option", "check_bootstrap_memory", "resamples_option"]
 
 baseline_option = click.option(
     "--baseline",
@@ -15,9 +20,21 @@ baseline_option = click.option(
 )
 resamples_option = click.option(
     "--resamples",
-    type=click.IntRange(min=1),
+    type=click.IntRange(1, MAX_RESAMPLES),
     default=10_000,
     show_default=True,
     metavar="N",
     help="Bootstrap resamples of whole runs per condition.",
 )
+
+
+def check_bootstrap_memory(resamples: int, width: int, conditions: int) -> None:
+    """Refuse ``--resamples`` whose bootstrap cannot fit in memory, before any other work.
+
+    ``width`` bounds the values one resample spans (runs times carriers).
+    """
+    check_memory(
+        f"--resamples {resamples} over {conditions} condition(s)",
+        bootstrap_memory(resamples, conditions=conditions, width=max(1, width)),
+        error=StatisticsError,
+    )

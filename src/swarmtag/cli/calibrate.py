@@ -25,6 +25,7 @@ from rich.progress import (
 from rich.table import Table
 
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._outputs import OutputPlan
 from swarmtag.calibration import (
     DEFAULT_EVALUATIONS,
     FIT_COLUMNS,
@@ -48,16 +49,20 @@ from swarmtag.sim.profiles import DEFAULT_PROFILE, load_profile, write_profile_f
 __all__ = ["calibrate_cmd", "command_line"]
 
 
-def _check_output(option: str, path: Path | None, suffix: str | None) -> None:
-    """Refuse an output path before any work: wrong suffix, or a folder that does not exist."""
-    if path is None:
-        return
-    if suffix is not None and path.suffix.lower() != suffix:
-        raise CalibrationError(f"{option}: {str(path)!r} must end in {suffix}")
-    if not path.parent.is_dir():
-        raise CalibrationError(f"{option}: folder {str(path.parent)!r} does not exist")
-    if path.is_dir():
-        raise CalibrationError(f"{option}: {str(path)!r} is a folder")
+def _plan_outputs(profile: str, out: Path, report: Path | None, cache_file: Path) -> OutputPlan:
+    """Refuse output paths before any work; the cache (appended while working) is checked too."""
+    plan = OutputPlan(error=CalibrationError)
+    if Path(profile).is_file():
+        plan.input("--profile", Path(profile))
+    plan.file("--out", out, suffixes=(".toml",))
+    if report is not None:
+        plan.file("--report", report, suffixes=(".md",))
+    if not cache_file.parent.is_dir():
+        raise CalibrationError(f"--cache: folder {str(cache_file.parent)!r} does not exist")
+    if cache_file.exists() and not cache_file.is_file():
+        raise CalibrationError(f"--cache: {str(cache_file)!r} is not a regular file")
+    plan.input("--cache", cache_file)
+    return plan
 
 
 def command_line(
@@ -198,10 +203,8 @@ def calibrate_cmd(
     Sobol design and bounded Nelder-Mead search the bounds; evaluated points
     are cached, so an interrupted or repeated calibration resumes.
     """
-    _check_output("--out", out, ".toml")
-    _check_output("--report", report, ".md")
     cache_file = cache_path if cache_path is not None else default_cache_path(out)
-    _check_output("--cache", cache_file, None)
+    plan = _plan_outputs(profile, out, report, cache_file)
     base = load_profile(profile)
     fixed = dict(parse_set(text) for text in settings)
     targets = load_baseline(baseline, condition=condition)
@@ -247,31 +250,31 @@ def calibrate_cmd(
         settings=settings,
         condition=condition,
     )
-    try:
-        with bar:
-            result = calibrate(
-                problem,
-                evaluations=budget,
-                cache=cache,
-                name=name or targets.name or out.stem,
-                description=targets.description,
-                base=profile,
-                command=command,
-                workers=workers or os.cpu_count() or 1,
-                progress=tell,
+    with plan.writing() as stage:
+        try:
+            with bar:
+                result = calibrate(
+                    problem,
+                    evaluations=budget,
+                    cache=cache,
+                    name=name or targets.name or out.stem,
+                    description=targets.description,
+                    base=profile,
+                    command=command,
+                    workers=workers or os.cpu_count() or 1,
+                    progress=tell,
+                )
+        except KeyboardInterrupt:
+            note = (
+                f"{len(cache)} evaluated points are kept in {cache_file}; "
+                "run the same command to resume"
             )
-    except KeyboardInterrupt:
-        click.echo(
-            f"interrupted: {len(cache)} evaluated points are kept in {cache_file}; "
-            "run the same command to resume",
-            err=True,
-        )
-        raise click.Abort from None
-    write_profile_file(out, result.profile)
-    written = [f"profile {result.profile.name}: {out}"]
-    if report is not None:
-        atomic_write_bytes(report, markdown_report(result).encode())
-        written.append(f"fit report: {report}")
+            raise KeyboardInterrupt(note) from None
+        write_profile_file(stage.path(out), result.profile)
+        written = [f"profile {result.profile.name}: {out}"]
+        if report is not None:
+            atomic_write_bytes(stage.path(report), markdown_report(result).encode())
+            written.append(f"fit report: {report}")
     table = Table(title=f"Fit of {result.profile.name} to {targets.source}")
     for column in FIT_COLUMNS:
         table.add_column(column, justify="left" if column in ("set-up", "KPI") else "right")

@@ -13,6 +13,8 @@ from rich.table import Table
 
 from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._checks import MAX_SEED
+from swarmtag._outputs import OutputPlan, Stage
 from swarmtag.analysis import (
     CENSORED_METRICS,
     CORE_METRICS,
@@ -44,8 +46,7 @@ from swarmtag.analysis.tables import (
     unit_word,
 )
 from swarmtag.cli._console import make_console
-from swarmtag.cli._options import baseline_option, resamples_option
-from swarmtag.errors import ConfigError
+from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
 from swarmtag.io import CarrierLog, read_event_log, read_event_table
 
 __all__ = ["metrics", "render_choices", "render_report"]
@@ -180,13 +181,46 @@ def _write_html(
         )
 
 
+def _write_outputs(
+    stage: Stage,
+    report: MetricsReport,
+    log: CarrierLog,
+    choices: Sequence[ConditionChoices] | None,
+    *,
+    events: Path,
+    markdown: Path | None,
+    latex: Path | None,
+    html_out: Path | None,
+    figures: Path | None,
+) -> list[str]:
+    """Write the planned outputs into ``stage``; what was written, for the closing lines."""
+    written = []
+    if markdown is not None:
+        text = markdown_tables(report) + ("\n" + choices_markdown(choices) if choices else "")
+        atomic_write_bytes(stage.path(markdown), text.encode())
+        written.append(f"Markdown tables: {markdown}")
+    if latex is not None:
+        text = latex_tables(report) + ("\n" + choices_latex(choices) if choices else "")
+        atomic_write_bytes(stage.path(latex), text.encode())
+        written.append(f"LaTeX tables: {latex}")
+    if figures is not None:
+        from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib
+
+        drawn = write_figures(report, log, stage.path(figures))
+        written += [f"figure: {figures / path.name}" for path in drawn]
+    if html_out is not None:
+        _write_html(stage.path(html_out), events, report, log, choices)
+        written.append(f"HTML report: {html_out}")
+    return written
+
+
 @click.command("metrics")
 @click.argument("events", metavar="EVENTS", type=click.Path(path_type=Path))
 @baseline_option
 @resamples_option
 @click.option(
     "--seed",
-    type=click.IntRange(min=0),
+    type=click.IntRange(0, MAX_SEED),
     default=0,
     show_default=True,
     metavar="S",
@@ -241,37 +275,44 @@ def metrics(
     Kaplan-Meier P95). Each other condition is compared with the baseline:
     difference with CI, bootstrap p-value and Mann-Whitney U.
     """
-    for option, path in (("--markdown", markdown), ("--latex", latex), ("--html", html_out)):
-        if path is not None and not path.parent.is_dir():
-            raise ConfigError(f"{option}: folder {str(path.parent)!r} does not exist")
-    log = read_event_log(events)
-    report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
-    choices = None
+    plan = OutputPlan()
+    plan.input("EVENTS", events)
     if event_table is not None:
-        choices = choice_statistics(
-            read_event_table(event_table),
-            log=log,
-            conditions=[c.condition for c in report.conditions],
-            n_resamples=resamples,
-            seed=seed,
-        )
-    written = []
-    if markdown is not None:
-        text = markdown_tables(report) + ("\n" + choices_markdown(choices) if choices else "")
-        atomic_write_bytes(markdown, text.encode())
-        written.append(f"Markdown tables: {markdown}")
-    if latex is not None:
-        text = latex_tables(report) + ("\n" + choices_latex(choices) if choices else "")
-        atomic_write_bytes(latex, text.encode())
-        written.append(f"LaTeX tables: {latex}")
+        plan.input("--event-table", event_table)
+    for option, path, suffixes in (
+        ("--markdown", markdown, (".md", ".markdown")),
+        ("--latex", latex, (".tex",)),
+        ("--html", html_out, (".html", ".htm")),
+    ):
+        if path is not None:
+            plan.file(option, path, suffixes=suffixes)
     if figures is not None:
-        from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
-
-        figures.mkdir(parents=True, exist_ok=True)
-        written += [f"figure: {path}" for path in write_figures(report, log, figures)]
-    if html_out is not None:
-        _write_html(html_out, events, report, log, choices)
-        written.append(f"HTML report: {html_out}")
+        plan.folder("--figures", figures)
+    log = read_event_log(events)
+    table = read_event_table(event_table) if event_table is not None else None
+    check_bootstrap_memory(resamples, len(log), len(log.conditions))
+    with plan.writing() as stage:
+        report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
+        choices = None
+        if table is not None:
+            choices = choice_statistics(
+                table,
+                log=log,
+                conditions=[c.condition for c in report.conditions],
+                n_resamples=resamples,
+                seed=seed,
+            )
+        written = _write_outputs(
+            stage,
+            report,
+            log,
+            choices,
+            events=events,
+            markdown=markdown,
+            latex=latex,
+            html_out=html_out,
+            figures=figures,
+        )
     if as_json:
         document = report.to_json()
         if choices is not None:

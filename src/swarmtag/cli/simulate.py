@@ -12,15 +12,19 @@ from typing import Final
 import click
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
+from swarmtag._checks import MAX_RUN_INDEX, MAX_SEED
+from swarmtag._outputs import OutputPlan, Stage
+from swarmtag._resources import check_memory
 from swarmtag.analysis import choice_statistics, summarize
 from swarmtag.cli._console import make_console
-from swarmtag.cli._options import baseline_option, resamples_option
+from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
 from swarmtag.cli._scenario import build_scenario, scenario_options
 from swarmtag.cli.metrics import render_choices, render_report
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 from swarmtag.policy import Policy, Proximity, Urgency, Weighted, parse_policy
 from swarmtag.sim import Scenario, simulate
+from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER, batch_memory
 
 __all__ = ["DEFAULT_CONDITIONS", "run_conditions", "simulate_cmd"]
 
@@ -70,17 +74,32 @@ def _per_condition(path: Path, policy: Policy, several: bool) -> Path:
     return path.with_name(f"{path.stem}-{slug}{path.suffix}")
 
 
-def _check_outputs(outputs: Sequence[tuple[str, Path | None, tuple[str, ...]]]) -> None:
-    """Refuse bad output paths before any work is done."""
-    for option, path, suffixes in outputs:
+def _plan_outputs(
+    plan: OutputPlan,
+    policies: Sequence[Policy],
+    outputs: Sequence[tuple[str, Path | None, tuple[str, ...], bool]],
+) -> None:
+    """Refuse bad output paths before any work; per-condition pictures are planned one by one."""
+    several = len(policies) > 1
+    for option, path, suffixes, per_condition in outputs:
         if path is None:
             continue
-        if path.suffix.lower() not in suffixes:
-            msg = f"{option}: {str(path)!r} must end in {' or '.join(suffixes)}"
-            raise ConfigError(msg)
-        if not path.parent.is_dir():
-            msg = f"{option}: folder {str(path.parent)!r} does not exist"
-            raise ConfigError(msg)
+        targets = [_per_condition(path, p, several) for p in policies] if per_condition else [path]
+        for target in targets:
+            plan.file(option, target, suffixes=suffixes)
+
+
+def _check_work(scenario: Scenario, conditions: int, runs: int, run_offset: int) -> None:
+    """Refuse run counts whose logs cannot fit in memory, before simulating anything."""
+    if run_offset + runs > MAX_RUN_INDEX:
+        msg = f"--run-offset {run_offset} + --runs {runs} exceeds the largest run index 2**53"
+        raise ConfigError(msg)
+    check_memory(
+        f"--runs {runs} of {conditions} condition(s) with {scenario.carriers} carriers",
+        conditions * runs * scenario.carriers * LOG_BYTES_PER_CARRIER
+        + batch_memory(scenario, min(runs, CHUNK_RUNS)),
+        error=ConfigError,
+    )
 
 
 def run_conditions(
@@ -126,6 +145,7 @@ def _draw(
     snapshot_path: Path | None,
     animation_path: Path | None,
     trajectories_path: Path | None,
+    stage: Stage,
 ) -> list[str]:
     """Re-run ``run`` of each condition recording it; draw and save it; say what was written."""
     from swarmtag.sim.render import animate, snapshot  # noqa: PLC0415 - matplotlib is an extra
@@ -138,15 +158,15 @@ def _draw(
         assert traj is not None
         if snapshot_path is not None:
             target = _per_condition(snapshot_path, policy, several)
-            tick = snapshot(traj, target, run=run)
+            tick = snapshot(traj, stage.path(target), run=run)
             written.append(f"snapshot of {policy.name} run {run} at tick {tick}: {target}")
         if animation_path is not None:
             target = _per_condition(animation_path, policy, several)
-            frames = animate(traj, target, run=run)
+            frames = animate(traj, stage.path(target), run=run)
             written.append(f"animation of {policy.name} run {run} ({frames} frames): {target}")
         if trajectories_path is not None:
             target = _per_condition(trajectories_path, policy, several)
-            traj.save(target)
+            traj.save(stage.path(target))
             written.append(
                 f"trajectories of {policy.name} run {run} ({traj.ticks} ticks): {target}"
             )
@@ -170,17 +190,21 @@ def _draw(
 @click.option("--alpha", type=float, help="alpha of --policy urgency (> 0).")
 @click.option("--w", type=float, help="w of --policy weighted (0-1).")
 @click.option(
-    "--runs", type=click.IntRange(min=1), default=30, show_default=True, help="Runs per condition."
+    "--runs",
+    type=click.IntRange(1, MAX_RUN_INDEX),
+    default=30,
+    show_default=True,
+    help="Runs per condition.",
 )
 @click.option(
     "--run-offset",
-    type=click.IntRange(min=0),
+    type=click.IntRange(0, MAX_RUN_INDEX),
     default=0,
     show_default=True,
     help="Global index of the first run: run i gives the same rows alone or in any batch.",
 )
 @click.option(
-    "--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Master seed."
+    "--seed", type=click.IntRange(0, MAX_SEED), default=0, show_default=True, help="Master seed."
 )
 @scenario_options
 @click.option(
@@ -206,7 +230,7 @@ def _draw(
 )
 @click.option(
     "--draw-run",
-    type=click.IntRange(min=0),
+    type=click.IntRange(0, MAX_RUN_INDEX),
     help="Run to draw or save with --snapshot/--animate/--trajectories [default: the first run].",
 )
 @baseline_option
@@ -249,45 +273,55 @@ def simulate_cmd(
     """
     policies = _policies(conditions, policy, alpha, w)
     scenario = build_scenario(profile=profile, config=config, flags=flags, settings=settings)
-    _check_outputs(
+    plan = OutputPlan()
+    for option, source in (("--config", config), ("--profile", Path(profile))):
+        if source is not None and source.is_file():
+            plan.input(option, source)
+    _plan_outputs(
+        plan,
+        policies,
         [
-            ("--events", events, (".csv", ".parquet")),
-            ("--event-table", event_table, (".csv", ".parquet")),
-            ("--snapshot", snapshot, (".png",)),
-            ("--animate", animation, (".gif", ".mp4")),
-            ("--trajectories", trajectories_out, (".npz",)),
-        ]
+            ("--events", events, (".csv", ".parquet"), False),
+            ("--event-table", event_table, (".csv", ".parquet"), False),
+            ("--snapshot", snapshot, (".png",), True),
+            ("--animate", animation, (".gif", ".mp4"), True),
+            ("--trajectories", trajectories_out, (".npz",), True),
+        ],
     )
+    _check_work(scenario, len(policies), runs, run_offset)
+    check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()
     show = sys.stderr.isatty() if progress is None else progress
-    log, table = run_conditions(
-        scenario, policies, seed=seed, runs=runs, run_offset=run_offset, progress=show
-    )
-    report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
-    choices = choice_statistics(
-        table,
-        log=log,
-        conditions=[c.condition for c in report.conditions],
-        n_resamples=resamples,
-        seed=seed,
-    )
-    notes = []
-    if events is not None:
-        write_event_log(log, events)
-        notes.append(f"event log ({len(log)} rows): {events}")
-    if event_table is not None:
-        write_event_table(table, event_table)
-        notes.append(f"event table ({len(table)} rows): {event_table}")
-    if snapshot is not None or animation is not None or trajectories_out is not None:
-        notes += _draw(
-            scenario,
-            policies,
-            seed=seed,
-            run=run_offset if draw_run is None else draw_run,
-            snapshot_path=snapshot,
-            animation_path=animation,
-            trajectories_path=trajectories_out,
+    with plan.writing() as stage:
+        log, table = run_conditions(
+            scenario, policies, seed=seed, runs=runs, run_offset=run_offset, progress=show
         )
+        report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
+        choices = choice_statistics(
+            table,
+            log=log,
+            conditions=[c.condition for c in report.conditions],
+            n_resamples=resamples,
+            seed=seed,
+        )
+        notes = []
+        if events is not None:
+            write_event_log(log, stage.path(events))
+            notes.append(f"event log ({len(log)} rows): {events}")
+        if event_table is not None:
+            write_event_table(table, stage.path(event_table))
+            notes.append(f"event table ({len(table)} rows): {event_table}")
+        if snapshot is not None or animation is not None or trajectories_out is not None:
+            notes += _draw(
+                scenario,
+                policies,
+                seed=seed,
+                run=run_offset if draw_run is None else draw_run,
+                snapshot_path=snapshot,
+                animation_path=animation,
+                trajectories_path=trajectories_out,
+                stage=stage,
+            )
     if as_json:
         document = {**report.to_json(), "choices": [c.to_json() for c in choices]}
         click.echo(json.dumps(document, allow_nan=False))

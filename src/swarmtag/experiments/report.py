@@ -24,6 +24,7 @@ from typing import Any, Final
 
 from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._outputs import OutputPlan
 from swarmtag.analysis import ConditionChoices, MetricsReport, choice_statistics, summarize
 from swarmtag.analysis.choice_tables import choices_html, choices_latex, choices_markdown
 from swarmtag.analysis.html import Section, write_html
@@ -164,8 +165,9 @@ def _facts(study: Study, runs: int, resamples: int, record: StudyRecord | None) 
 
 
 def _study_sections(
-    out_dir: Path, study: Study, *, resamples: int | None, export_format: str
+    out_dir: Path, target_dir: Path, study: Study, *, resamples: int | None, export_format: str
 ) -> list[Section]:
+    """Read ``study``'s runs from ``out_dir``; write its logs, tables, figures in ``target_dir``."""
     from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
 
     record = _read_record(out_dir, study)
@@ -176,14 +178,14 @@ def _study_sections(
             resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
         reports = _scale_reports(store, study, runs, resamples)
         for part in study.scales:
-            target = out_dir / study.name / part.key
+            target = target_dir / study.name / part.key
             target.mkdir(parents=True, exist_ok=True)
             key = study_key(study, part.key)
             store.export(key, study.conditions, runs, target, fmt=export_format)
     sections = []
     for index, (scale, result) in enumerate(reports.items()):
         report, choices = result.report, result.choices
-        folder = out_dir / study.name / scale
+        folder = target_dir / study.name / scale
         (folder / "figures").mkdir(parents=True, exist_ok=True)
         markdown = markdown_tables(report) + "\n" + choices_markdown(choices)
         atomic_write_bytes(folder / "tables.md", markdown.encode())
@@ -201,7 +203,7 @@ def _study_sections(
         )
     if len(reports) > 1:
         sections.append(
-            _scalability_section(out_dir, study, {k: r.report for k, r in reports.items()})
+            _scalability_section(target_dir, study, {k: r.report for k, r in reports.items()})
         )
     return sections
 
@@ -238,14 +240,19 @@ def write_report(
     if not (folder / STORE_NAME).is_file():
         msg = f"{folder}: no results store ({STORE_NAME}) here; run the studies first"
         raise StudyError(msg)
-    sections = []
-    for study in studies:
-        sections += _study_sections(folder, study, resamples=resamples, export_format=export_format)
-    path = folder / REPORT_NAME
-    write_html(
-        path,
-        "swarmtag reproduction report",
-        sections,
-        facts={"swarmtag": __version__, "studies": ", ".join(s.name for s in studies)},
-    )
-    return path
+    plan = OutputPlan(error=StudyError)
+    plan.folder("DIR", folder)
+    with plan.writing() as stage:  # every file of the report, or none of them
+        staged = stage.path(folder)
+        sections = []
+        for study in studies:
+            sections += _study_sections(
+                folder, staged, study, resamples=resamples, export_format=export_format
+            )
+        write_html(
+            staged / REPORT_NAME,
+            "swarmtag reproduction report",
+            sections,
+            facts={"swarmtag": __version__, "studies": ", ".join(s.name for s in studies)},
+        )
+    return folder / REPORT_NAME

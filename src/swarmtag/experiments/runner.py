@@ -28,19 +28,32 @@ from typing import Any, Final
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._resources import check_memory
 from swarmtag.analysis import summarize
+from swarmtag.analysis.resampling import bootstrap_memory
 from swarmtag.errors import StudyError
 from swarmtag.experiments.chunks import ChunkJob, ChunkResult, split_runs
 from swarmtag.experiments.execute import run_dask, run_local
 from swarmtag.experiments.spec import Study
 from swarmtag.experiments.store import ResultsStore, RunKey
+from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER
 
-__all__ = ["QUICK_RESAMPLES", "STORE_NAME", "StudyResult", "plan_chunks", "run_study", "study_key"]
+__all__ = [
+    "QUICK_RESAMPLES",
+    "STORE_NAME",
+    "StudyResult",
+    "check_study_memory",
+    "plan_chunks",
+    "run_study",
+    "study_key",
+]
 
 STORE_NAME: Final = "results.duckdb"
 """File name of the results store inside the output folder."""
 QUICK_RESAMPLES: Final = 1000
 """Bootstrap resamples under ``quick`` (at most; a study asking fewer keeps its own)."""
+JOB_BYTES: Final = 600
+"""Memory of one planned chunk job (its key and run range) until it is done."""
 
 
 def study_key(study: Study, scale: str) -> RunKey:
@@ -100,6 +113,43 @@ def _write_progress(path: Path, done: int, total: int) -> None:
     atomic_write_bytes(path, json.dumps({"done": done, "total": total}).encode() + b"\n")
 
 
+def check_study_memory(study: Study, runs: int, *, quick: bool = False) -> None:
+    """Refuse a study whose logs or bootstrap (loaded per scale at the end) cannot fit in memory."""
+    conditions = len(study.conditions)
+    resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
+    carriers = max(scale.scenario.carriers for scale in study.scales)
+    width = runs * carriers
+    jobs = len(study.scales) * conditions * -(-runs // study.chunk_runs)
+    estimate = (
+        conditions * width * LOG_BYTES_PER_CARRIER
+        + JOB_BYTES * jobs
+        + bootstrap_memory(resamples, conditions=conditions, width=width)
+    )
+    check_memory(
+        f"study {study.name} ({runs} runs x {conditions} conditions, {resamples} resamples)",
+        estimate,
+        error=StudyError,
+    )
+
+
+def _prepare_folder(folder: Path, name: str) -> None:
+    """The results folder and its study folder, or one line saying why they cannot be made."""
+    if folder.exists() and not folder.is_dir():
+        msg = f"--out: {str(folder)!r} is a file; give a folder"
+        raise StudyError(msg)
+    if not folder.parent.is_dir():
+        msg = f"--out: folder {str(folder.parent)!r} does not exist"
+        raise StudyError(msg)
+    try:
+        (folder / name).mkdir(parents=True, exist_ok=True)
+        probe = folder / f".{name}.writable.tmp"
+        probe.touch()
+        probe.unlink()
+    except OSError as problem:
+        msg = f"--out: {str(folder)!r} cannot be written ({problem.strerror})"
+        raise StudyError(msg) from None
+
+
 def run_study(
     study: Study,
     *,
@@ -124,13 +174,11 @@ def run_study(
         msg = f"workers: {workers} is not an integer >= 1"
         raise StudyError(msg)
     folder = Path(out_dir)
-    if not folder.parent.is_dir():
-        msg = f"out_dir: folder {str(folder.parent)!r} does not exist"
-        raise StudyError(msg)
-    study_dir = folder / study.name
-    study_dir.mkdir(parents=True, exist_ok=True)
-    progress_path = study_dir / "progress.json"
     runs = study.run_count(quick=quick)
+    check_study_memory(study, runs, quick=quick)
+    _prepare_folder(folder, study.name)
+    study_dir = folder / study.name
+    progress_path = study_dir / "progress.json"
     total = runs * len(study.conditions) * len(study.scales)
     with ResultsStore(folder / STORE_NAME) as store:
         jobs = sorted(plan_chunks(study, store, quick=quick), key=_cost, reverse=True)

@@ -45,10 +45,12 @@ from pathlib import Path
 from typing import Any, Final
 
 from swarmtag import __version__
+from swarmtag._checks import MAX_RESAMPLES, MAX_RUN_INDEX, MAX_SEED, check_int
 from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError, PolicyError, StudyError
 from swarmtag.policy import Policy, parse_policy
 from swarmtag.sim import Scenario
+from swarmtag.sim.groups import MAX_TICKS
 from swarmtag.sim.profiles import DEFAULT_PROFILE, Profile, load_profile
 
 __all__ = ["DEFAULT_SCALE", "URGENCY_MODELS", "Scale", "Study", "read_study_file"]
@@ -77,15 +79,14 @@ _KEYS: Final = (
 _SAFE_NAME: Final = re.compile(r"[A-Za-z0-9._-]+")
 _DEFAULT_TICKS: Final = 3000
 _DEFAULT_QUICK: Final = 10
+MAX_CHUNK_RUNS: Final = 10_000
+"""Most runs in one unit of work (one batch in one worker's memory)."""
 # Keys the study sets itself: a scenario table naming them would be silently overridden.
 _STUDY_OWNED: Final = ("ticks",)
 
 
-def _int(value: object, key: str, *, low: int) -> int:
-    if isinstance(value, int) and not isinstance(value, bool) and value >= low:
-        return value
-    msg = f"{key}: {value!r} is not an integer >= {low}"
-    raise StudyError(msg)
+def _int(value: object, key: str, *, low: int, high: int | None = None) -> int:
+    return check_int(key, value, low=low, high=high, error=StudyError)
 
 
 def _text(value: object, key: str) -> str:
@@ -190,14 +191,14 @@ class Study:
         if self.urgency not in URGENCY_MODELS:
             msg = f"urgency: {self.urgency!r} is not one of {', '.join(URGENCY_MODELS)}"
             raise StudyError(msg)
-        _int(self.runs, "runs", low=1)
-        _int(self.quick_runs, "quick_runs", low=1)
+        _int(self.runs, "runs", low=1, high=MAX_RUN_INDEX)
+        _int(self.quick_runs, "quick_runs", low=1, high=MAX_RUN_INDEX)
         if self.quick_runs > self.runs:
             msg = f"quick_runs: {self.quick_runs} is more than runs ({self.runs})"
             raise StudyError(msg)
-        _int(self.seed, "seed", low=0)
-        _int(self.resamples, "resamples", low=1)
-        _int(self.chunk_runs, "chunk_runs", low=1)
+        _int(self.seed, "seed", low=0, high=MAX_SEED)
+        _int(self.resamples, "resamples", low=1, high=MAX_RESAMPLES)
+        _int(self.chunk_runs, "chunk_runs", low=1, high=MAX_CHUNK_RUNS)
         if not self.baseline:
             object.__setattr__(self, "baseline", self.conditions[0])
         if self.baseline not in self.conditions:
@@ -227,13 +228,13 @@ class Study:
                 msg = f"{key}: missing; a study needs {', '.join(_REQUIRED)}"
                 raise StudyError(msg)
         conditions = _conditions(data["conditions"])
-        runs = _int(data["runs"], "runs", low=1)
+        runs = _int(data["runs"], "runs", low=1, high=MAX_RUN_INDEX)
         urgency = data.get("urgency", "growing")
         if urgency not in URGENCY_MODELS:
             msg = f"urgency: {urgency!r} is not one of {', '.join(URGENCY_MODELS)}"
             raise StudyError(msg)
         _folder_name(data["name"], "name")
-        ticks = _int(data.get("ticks", _DEFAULT_TICKS), "ticks", low=1)
+        ticks = _int(data.get("ticks", _DEFAULT_TICKS), "ticks", low=1, high=MAX_TICKS)
         profile_name = _text(data.get("profile", DEFAULT_PROFILE), "profile")
         try:
             profile = load_profile(profile_name)
@@ -245,10 +246,15 @@ class Study:
             conditions=conditions,
             baseline=_text(data.get("baseline", conditions[0]), "baseline"),
             runs=runs,
-            quick_runs=_int(data.get("quick_runs", min(runs, _DEFAULT_QUICK)), "quick_runs", low=1),
-            seed=_int(data.get("seed", 0), "seed", low=0),
-            resamples=_int(data.get("resamples", 10_000), "resamples", low=1),
-            chunk_runs=_int(data.get("chunk_runs", 10), "chunk_runs", low=1),
+            quick_runs=_int(
+                data.get("quick_runs", min(runs, _DEFAULT_QUICK)),
+                "quick_runs",
+                low=1,
+                high=MAX_RUN_INDEX,
+            ),
+            seed=_int(data.get("seed", 0), "seed", low=0, high=MAX_SEED),
+            resamples=_int(data.get("resamples", 10_000), "resamples", low=1, high=MAX_RESAMPLES),
+            chunk_runs=_int(data.get("chunk_runs", 10), "chunk_runs", low=1, high=MAX_CHUNK_RUNS),
             urgency=urgency,
             profile=profile_name,
             scales=_scales(data, urgency, ticks, profile),
@@ -314,7 +320,7 @@ def _scale_scenario(
     """
     urgency, ticks, profile = setting
     overrides: dict[str, Any] = {key: value for key, value in extra.items() if key != "ticks"}
-    run_length = _int(extra.get("ticks", ticks), f"{where}.ticks", low=1)
+    run_length = _int(extra.get("ticks", ticks), f"{where}.ticks", low=1, high=MAX_TICKS)
     overrides["urgency.model"] = urgency
     if urgency == "growing":
         overrides["ticks"] = run_length

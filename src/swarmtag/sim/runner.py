@@ -10,7 +10,7 @@ the event logs of SPEC §8.1.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Final, Protocol
 
 import numpy as np
 
@@ -33,6 +33,7 @@ from swarmtag.sim.wms import Operator
 from swarmtag.tag import TagStatus
 
 __all__ = [
+    "LOG_BYTES_PER_CARRIER",
     "InputSource",
     "SimResult",
     "batch_memory",
@@ -165,6 +166,11 @@ def run_batch(
         final_state=state,
         trajectories=None if recorder is None else recorder.finish(params, seed=seed, last=state),
     )
+
+
+LOG_BYTES_PER_CARRIER: Final = 2200
+"""Memory per carrier and run of logs kept until written: the carrier row (~120 B), its ~8
+event rows (~1000 B) and the CSV text while writing (measured: docs/reliability.md)."""
 
 
 def batch_memory(scenario: Scenario, runs: int, *, record: bool = False) -> float:

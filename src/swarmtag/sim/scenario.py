@@ -290,6 +290,12 @@ class Scenario:
             raise ConfigError(msg)
 
     def _check_events(self) -> None:
+        if self.realism.status_delay > self.run_ticks:
+            msg = (
+                f"realism.status_delay: {self.realism.status_delay} ticks is longer than the run "
+                f"(0-{self.run_ticks})"
+            )
+            raise ConfigError(msg)
         for event in self.reprioritisations:
             if event.carrier >= self.carriers:
                 msg = (

@@ -1,0 +1,161 @@
+"""The output plan: one rule for every output path, all outputs or none."""
+
+from __future__ import annotations
+
+import os
+import signal
+from pathlib import Path
+
+import pytest
+
+from swarmtag._outputs import STAGING_PREFIX, OutputPlan
+from swarmtag.errors import OutputError, StudyError
+
+
+def unwritable_folder(tmp_path: Path) -> Path:
+    """A folder nobody may create files in: /proc for root (chmod does not stop root)."""
+    if os.geteuid() == 0:
+        return Path("/proc")
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(0o555)
+    return folder
+
+
+def names(folder: Path) -> list[str]:
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*"))
+
+
+def write_then(plan: OutputPlan, targets: list[Path], problem: BaseException | None) -> None:
+    """Stage ``targets`` with text, then raise ``problem`` (if any) inside the plan's writing."""
+    with plan.writing() as stage:
+        for target in targets:
+            stage.path(target).write_text("new")
+        if problem is not None:
+            raise problem
+
+
+def test_all_outputs_appear_together(tmp_path):
+    plan = OutputPlan()
+    a = plan.file("--a", tmp_path / "a.csv", suffixes=(".csv",))
+    b = plan.file("--b", tmp_path / "b.md")
+    figs = plan.folder("--figures", tmp_path / "figs")
+    with plan.writing() as stage:
+        stage.path(a).write_text("a")
+        stage.path(b).write_text("b")
+        (stage.path(figs) / "one.png").write_bytes(b"png")
+        assert names(tmp_path)[0].startswith(STAGING_PREFIX)  # nothing in place yet
+        assert not a.exists()
+    assert names(tmp_path) == ["a.csv", "b.md", "figs", "figs/one.png"]
+
+
+def test_a_failure_leaves_the_old_files_and_no_staging(tmp_path):
+    (tmp_path / "a.csv").write_text("old")
+    plan = OutputPlan()
+    a = plan.file("--a", tmp_path / "a.csv")
+    b = plan.file("--b", tmp_path / "b.csv")
+    with pytest.raises(RuntimeError):
+        write_then(plan, [a, b], RuntimeError())
+    assert names(tmp_path) == ["a.csv"]
+    assert (tmp_path / "a.csv").read_text() == "old"
+
+
+def test_an_interrupt_while_working_leaves_nothing(tmp_path):
+    plan = OutputPlan()
+    a = plan.file("--a", tmp_path / "a.csv")
+    with pytest.raises(KeyboardInterrupt):
+        write_then(plan, [a], KeyboardInterrupt())
+    assert names(tmp_path) == []
+
+
+def test_an_output_that_was_not_written_fails_before_any_move(tmp_path):
+    plan = OutputPlan()
+    a = plan.file("--a", tmp_path / "a.csv")
+    plan.file("--b", tmp_path / "b.csv")
+    with pytest.raises(OutputError, match=r"not written: .*b\.csv"), plan.writing() as stage:
+        stage.path(a).write_text("a")
+    assert names(tmp_path) == []
+
+
+def test_folder_outputs_merge_into_what_is_there(tmp_path):
+    (tmp_path / "out" / "keep").mkdir(parents=True)
+    (tmp_path / "out" / "keep" / "old.txt").write_text("old")
+    plan = OutputPlan()
+    out = plan.folder("DIR", tmp_path / "out")
+    with plan.writing() as stage:
+        (stage.path(out) / "keep").mkdir()
+        (stage.path(out) / "keep" / "new.txt").write_text("new")
+    assert names(tmp_path) == ["out", "out/keep", "out/keep/new.txt", "out/keep/old.txt"]
+
+
+@pytest.mark.parametrize(
+    ("make", "path", "suffixes", "message"),
+    [
+        (None, "missing/a.csv", (), "folder '{tmp}/missing' does not exist"),
+        ("dir", "x.csv", (".csv",), "is a folder; give a file name"),
+        ("fifo", "x.csv", (), "is not a regular file"),
+        (None, "a.txt", (".csv", ".parquet"), "must end in .csv or .parquet"),
+        ("file", "x.csv/a.csv", (), "folder '{tmp}/x.csv' is not a folder"),
+    ],
+)
+def test_bad_file_paths_are_refused_when_planned(tmp_path, make, path, suffixes, message):
+    target = tmp_path / "x.csv"
+    if make == "dir":
+        target.mkdir()
+    elif make == "fifo":
+        os.mkfifo(target)
+    elif make == "file":
+        target.write_text("")
+    with pytest.raises(OutputError) as error:
+        OutputPlan().file("--out", tmp_path / path, suffixes=suffixes)
+    assert str(error.value).startswith(f"--out: '{tmp_path / path}'")
+    assert message.format(tmp=tmp_path) in str(error.value)
+
+
+def test_two_outputs_on_one_file_are_refused_whatever_the_spelling(tmp_path):
+    (tmp_path / "sub").mkdir()
+    plan = OutputPlan()
+    plan.file("--events", tmp_path / "same.csv")
+    with pytest.raises(OutputError, match=r"is also an output \(--events\)"):
+        plan.file("--event-table", tmp_path / "sub" / ".." / "same.csv")
+
+
+def test_an_output_on_an_input_is_refused(tmp_path):
+    plan = OutputPlan()
+    plan.input("EVENTS", tmp_path / "log.csv")
+    with pytest.raises(OutputError, match=r"is also an input \(EVENTS\)"):
+        plan.file("--out", tmp_path / "log.csv")
+
+
+def test_folder_output_rules(tmp_path):
+    (tmp_path / "f").write_text("")
+    with pytest.raises(OutputError, match="is a file; give a folder"):
+        OutputPlan().folder("--figures", tmp_path / "f")
+    with pytest.raises(OutputError, match="does not exist"):
+        OutputPlan().folder("--figures", tmp_path / "a" / "b")
+
+
+def test_an_unwritable_folder_is_refused_before_any_work(tmp_path):
+    folder = unwritable_folder(tmp_path)
+    plan = OutputPlan(error=StudyError)
+    plan.file("--html", folder / "x.html")
+    worked = []
+    with pytest.raises(StudyError, match="cannot be written in folder"), plan.writing():
+        worked.append(True)
+    assert worked == []
+
+
+def test_sigint_during_the_final_moves_is_held_until_all_are_in_place(tmp_path, monkeypatch):
+    plan = OutputPlan()
+    targets = [plan.file(f"--o{i}", tmp_path / f"{i}.txt") for i in range(20)]
+    original = Path.replace
+
+    def replace_and_interrupt(self: Path, target: Path) -> Path:
+        os.kill(os.getpid(), signal.SIGINT)  # arrives mid-commit: held back until the end
+        return original(self, target)
+
+    monkeypatch.setattr(Path, "replace", replace_and_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        write_then(plan, targets, None)
+    monkeypatch.undo()
+    assert names(tmp_path) == sorted(f"{i}.txt" for i in range(20))
