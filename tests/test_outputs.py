@@ -12,16 +12,6 @@ from swarmtag._outputs import STAGING_PREFIX, OutputPlan
 from swarmtag.errors import OutputError, StudyError
 
 
-def unwritable_folder(tmp_path: Path) -> Path:
-    """A folder nobody may create files in: /proc for root (chmod does not stop root)."""
-    if os.geteuid() == 0:
-        return Path("/proc")
-    folder = tmp_path / "locked"
-    folder.mkdir()
-    folder.chmod(0o555)
-    return folder
-
-
 def names(folder: Path) -> list[str]:
     return sorted(str(p.relative_to(folder)) for p in folder.rglob("*"))
 
@@ -135,8 +125,8 @@ def test_folder_output_rules(tmp_path):
         OutputPlan().folder("--figures", tmp_path / "a" / "b")
 
 
-def test_an_unwritable_folder_is_refused_before_any_work(tmp_path):
-    folder = unwritable_folder(tmp_path)
+def test_an_unwritable_folder_is_refused_before_any_work(unwritable_dir):
+    folder = unwritable_dir
     plan = OutputPlan(error=StudyError)
     plan.file("--html", folder / "x.html")
     worked = []

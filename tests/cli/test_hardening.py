@@ -36,16 +36,6 @@ def refused(capsys, folder: Path, *argv: str) -> str:
     return err
 
 
-def unwritable(tmp_path: Path) -> Path:
-    """A folder no file can be created in, for root as well (tests may run as root)."""
-    if os.geteuid() == 0:
-        return Path("/proc")
-    folder = tmp_path / "locked"
-    folder.mkdir()
-    folder.chmod(0o555)
-    return folder
-
-
 def edited_log(tmp_path: Path, column: str, row: int, value: str) -> Path:
     """The example trial with one cell replaced, written as CSV text."""
     lines = example_trial_path().read_text().splitlines()
@@ -146,8 +136,8 @@ def test_markdown_onto_an_existing_folder_is_refused(tmp_path, capsys):
     assert "is a folder" in err
 
 
-def test_an_unwritable_html_refuses_before_writing_the_markdown(tmp_path, capsys):
-    bad = unwritable(tmp_path)
+def test_an_unwritable_html_refuses_before_writing_the_markdown(tmp_path, capsys, unwritable_dir):
+    bad = unwritable_dir
     err = refused(
         capsys, tmp_path, "metrics", str(example_trial_path()),
         "--markdown", str(tmp_path / "ok.md"), "--html", str(bad / "x.html"),
@@ -156,8 +146,8 @@ def test_an_unwritable_html_refuses_before_writing_the_markdown(tmp_path, capsys
     assert not (tmp_path / "ok.md").exists()
 
 
-def test_an_unwritable_snapshot_refuses_before_simulating(tmp_path, capsys):
-    bad = unwritable(tmp_path)
+def test_an_unwritable_snapshot_refuses_before_simulating(tmp_path, capsys, unwritable_dir):
+    bad = unwritable_dir
     err = refused(
         capsys, tmp_path, "simulate", *SMALL, "--runs", "1",
         "--events", str(tmp_path / "e.csv"), "--snapshot", str(bad / "a.png"),
@@ -165,12 +155,10 @@ def test_an_unwritable_snapshot_refuses_before_simulating(tmp_path, capsys):
     assert "--snapshot" in err
 
 
-def test_an_unwritable_study_folder_is_refused(tmp_path, capsys):
+def test_an_unwritable_study_folder_is_refused(tmp_path, capsys, unwritable_dir):
     study = tmp_path / "s.toml"
     study.write_text('name = "s"\nconditions = ["proximity"]\nruns = 1\nticks = 50\n')
-    err = refused(
-        capsys, tmp_path, "study", "run", str(study), "--out", str(unwritable(tmp_path) / "o")
-    )
+    err = refused(capsys, tmp_path, "study", "run", str(study), "--out", str(unwritable_dir / "o"))
     assert "--out" in err
 
 
@@ -232,3 +220,9 @@ def test_a_fifo_as_the_event_log_is_refused_without_blocking(tmp_path, capsys):
     os.mkfifo(fifo)
     err = refused(capsys, tmp_path, "metrics", str(fifo))
     assert "is not a regular file" in err
+
+
+def test_an_event_log_too_large_for_memory_is_refused_before_reading(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("SWARMTAG_MEMORY_LIMIT", "100KiB")
+    err = refused(capsys, tmp_path, "metrics", str(example_trial_path()))
+    assert "example_trial.csv (7.4 KiB) needs about" in err

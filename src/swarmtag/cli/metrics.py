@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import sys
 import tempfile
 from collections.abc import Sequence
+from contextlib import nullcontext
 from pathlib import Path
 
 import click
@@ -291,7 +293,10 @@ def metrics(
     log = read_event_log(events)
     table = read_event_table(event_table) if event_table is not None else None
     check_bootstrap_memory(resamples, len(log), len(log.conditions))
-    with plan.writing() as stage:
+    status = Console(stderr=True).status(
+        f"bootstrapping {resamples} resamples of {len(log.conditions)} condition(s)"
+    )
+    with plan.writing() as stage, status if sys.stderr.isatty() else nullcontext():
         report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
         choices = None
         if table is not None:

@@ -240,26 +240,23 @@ class CarrierLog(_Columns):
         codes = np.unique(self.condition, return_inverse=True)[1]
         return self.take(np.lexsort((self.carrier, self.run, codes)))
 
+    def _check_order(self, loc: RowLocator, later: str, earlier: str, reason: str) -> None:
+        """Refuse the first row whose ``later`` time is before its ``earlier`` one (NaN passes)."""
+        late: NDArray[np.float64] = getattr(self, later)
+        early: NDArray[np.float64] = getattr(self, earlier)
+        bad = np.flatnonzero(late < early)  # NaN compares False
+        if bad.size:
+            i = int(bad[0])
+            raise loc.error(
+                i, later, f"{float(late[i])!r} is before {earlier} {float(early[i])!r}{reason}"
+            )
+
     def _check_rows(self, loc: RowLocator) -> None:
         delivered = ~np.isnan(self.delivery_time)
-        bad = np.flatnonzero(self.pickup_time < self.order_time)  # NaN compares False
-        if bad.size:
-            i = int(bad[0])
-            raise loc.error(
-                i,
-                "pickup_time",
-                f"{float(self.pickup_time[i])!r} is before order_time "
-                f"{float(self.order_time[i])!r}; a carrier is picked up after it is ordered",
-            )
-        bad = np.flatnonzero(self.delivery_time < self.order_time)
-        if bad.size:
-            i = int(bad[0])
-            raise loc.error(
-                i,
-                "delivery_time",
-                f"{float(self.delivery_time[i])!r} is before order_time "
-                f"{float(self.order_time[i])!r}; a latency cannot be negative",
-            )
+        self._check_order(
+            loc, "pickup_time", "order_time", "; a carrier is picked up after it is ordered"
+        )
+        self._check_order(loc, "delivery_time", "order_time", "; a latency cannot be negative")
         bad = np.flatnonzero(delivered & np.isnan(self.pickup_time))
         if bad.size:
             raise loc.error(
@@ -267,15 +264,7 @@ class CarrierLog(_Columns):
                 "pickup_time",
                 "is empty but delivery_time is set; a delivered carrier was picked up first",
             )
-        bad = np.flatnonzero(delivered & (self.delivery_time < self.pickup_time))
-        if bad.size:
-            i = int(bad[0])
-            raise loc.error(
-                i,
-                "delivery_time",
-                f"{float(self.delivery_time[i])!r} is before pickup_time "
-                f"{float(self.pickup_time[i])!r}",
-            )
+        self._check_order(loc, "delivery_time", "pickup_time", "")
         bad = np.flatnonzero(delivered & (self.robot < 0))
         if bad.size:
             raise loc.error(

@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag._inputs import regular_file
+from swarmtag._resources import check_memory, format_bytes
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
     INT64_MAX,
@@ -91,6 +92,12 @@ _READ_ERRORS: Final = (
 """What a parser may raise on hostile content (pyarrow's errors derive from these too)."""
 
 
+BYTES_PER_FILE_BYTE: Final = {"csv": 24, "parquet": 64}
+"""Peak memory per byte of an event-log file while it is read and checked (tracemalloc:
+17-22 for CSV, the text, its cells as numpy strings and the columns; 42-53 for compressed
+Parquet; docs/reliability.md)."""
+
+
 def input_file(path: str | os.PathLike[str], what: str) -> Path:
     """``path`` if it is a readable regular file, else an ``EventLogError`` saying why.
 
@@ -99,7 +106,11 @@ def input_file(path: str | os.PathLike[str], what: str) -> Path:
     """
     if not os.path.lexists(path):
         raise EventLogError(f"{os.fspath(path)}: no such file")
-    return regular_file(path, what=what, error=EventLogError)
+    checked = regular_file(path, what=what, error=EventLogError)
+    size = checked.stat().st_size
+    kind = "parquet" if checked.suffix.lower() in {".parquet", ".pq"} else "csv"
+    check_memory(f"{os.fspath(path)} ({format_bytes(size)})", size * BYTES_PER_FILE_BYTE[kind])
+    return checked
 
 
 @contextmanager
