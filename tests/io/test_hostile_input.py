@@ -418,3 +418,15 @@ def test_in_memory_event_times_have_the_same_range():
             robot=[0],
             value=[1.0],
         )
+
+
+def test_a_long_list_of_rows_is_cut_to_five_in_the_message():
+    from swarmtag.data import example_trial_path
+    from swarmtag.io import CarrierLog, read_event_log
+
+    log = read_event_log(example_trial_path())
+    with pytest.raises(EventLogError) as error:
+        CarrierLog.concat([log] * 40)
+    message = str(error.value)
+    assert "has 40 rows for carrier" in message
+    assert message.endswith(", ... (40 in all))")

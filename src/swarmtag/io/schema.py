@@ -191,13 +191,16 @@ class RowLocator:
         return f"row {index + 1}"
 
     def where_many(self, indices: Sequence[int]) -> str:
-        """``lines 8 and 12`` / ``rows 3, 5 and 9`` for several data rows."""
+        """``lines 8 and 12`` / ``rows 3, 5 and 9``; beyond five, ``rows 1, 2, 3, 4, 5, ...``."""
+        shown_rows = list(indices[:5])
         if self.lines is not None:
-            word, numbers = "lines", [str(int(self.lines[i])) for i in indices]
+            word, numbers = "lines", [str(int(self.lines[i])) for i in shown_rows]
         else:
-            word, numbers = "rows", [str(i + 1) for i in indices]
+            word, numbers = "rows", [str(i + 1) for i in shown_rows]
         if len(numbers) == 1:
             return f"{word[:-1]} {numbers[0]}"
+        if len(indices) > len(shown_rows):
+            return f"{word} {', '.join(numbers)}, ... ({len(indices)} in all)"
         return f"{word} {', '.join(numbers[:-1])} and {numbers[-1]}"
 
     def prefix(self) -> str:
