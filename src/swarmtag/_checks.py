@@ -21,6 +21,7 @@ __all__ = [
     "MAX_RESAMPLES",
     "MAX_RUN_INDEX",
     "MAX_SEED",
+    "MAX_WORKERS",
     "check_bool",
     "check_choice",
     "check_int",
@@ -33,6 +34,8 @@ MAX_SEED: Final = 2**63 - 1
 """Largest master seed: a seed is stored as a signed 64-bit integer (results store, logs)."""
 MAX_RESAMPLES: Final = 10**9
 """Most bootstrap resamples any option or file accepts; memory is checked against the need first."""
+MAX_WORKERS: Final = 256
+"""Most worker processes any option accepts (each is a Python process with numpy loaded)."""
 MAX_RUN_INDEX: Final = 2**53
 """Largest global run index (run offset plus runs): run ids stay exact in float64 columns."""
 

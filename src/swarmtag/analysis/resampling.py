@@ -35,6 +35,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._interrupt import checkpoint
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS
 from swarmtag.analysis.curves import LATENCY_PERCENTILES
 from swarmtag.analysis.kpis import METRICS, OPTIONAL_METRICS
@@ -165,6 +166,7 @@ def iter_multiplicities(
     rows = max(1, min(n_resamples, chunk_elements // max(1, width, n_runs)))
     done = 0
     while done < n_resamples:
+        checkpoint()  # a Ctrl-C that numpy swallowed in the last chunk ends the bootstrap here
         take = min(rows, n_resamples - done)
         yield multiplicities(rng.integers(0, n_runs, size=(take, n_runs)), n_runs)
         done += take

@@ -25,6 +25,7 @@ from rich.progress import (
 from rich.table import Table
 
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._checks import MAX_WORKERS
 from swarmtag._outputs import OutputPlan
 from swarmtag.calibration import (
     DEFAULT_EVALUATIONS,
@@ -160,7 +161,7 @@ def _progress_bar(show: bool, total: int) -> tuple[Progress, TaskID]:
 )
 @click.option(
     "--workers",
-    type=click.IntRange(min=1),
+    type=click.IntRange(1, MAX_WORKERS),
     help="Worker processes [default: one per CPU]; results do not depend on it.",
 )
 @click.option(

@@ -10,13 +10,14 @@ from typing import Any
 
 import click
 
+from swarmtag._checks import MAX_RESAMPLES, MAX_WORKERS
 from swarmtag.errors import StudyError
 
 __all__ = ["reproduce", "study"]
 
 workers_option = click.option(
     "--workers",
-    type=click.IntRange(min=1),
+    type=click.IntRange(1, MAX_WORKERS),
     help="Worker processes [default: the number of CPU cores].",
 )
 scheduler_option = click.option(
@@ -105,7 +106,7 @@ def _studies(sources: Sequence[str], out_dir: Path | None) -> list[Any]:
 )
 @click.option(
     "--resamples",
-    type=click.IntRange(min=1),
+    type=click.IntRange(1, MAX_RESAMPLES),
     metavar="N",
     help="Bootstrap resamples [default: the study's own; capped after a quick run].",
 )
