@@ -33,6 +33,9 @@ def _new_temp(folder: Path, name: str) -> Path:
             os.close(os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
         except FileExistsError:  # pragma: no cover - 48 random bits
             continue
+        except BaseException:  # a Ctrl-C just as it was created: leave no temporary file
+            temp.unlink(missing_ok=True)
+            raise
         return temp
 
 

@@ -13,7 +13,35 @@ from pathlib import Path
 
 from swarmtag.errors import SwarmtagError
 
-__all__ = ["regular_file"]
+__all__ = ["check_path", "is_regular_file", "regular_file"]
+
+
+def is_regular_file(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` names a regular file; never raises.
+
+    ``Path.is_file`` raises on a name too long for the platform (ENAMETOOLONG),
+    so a long word given where a name or a file is accepted would fail there.
+    """
+    return os.path.isfile(path)  # noqa: PTH113 - Path.is_file raises ENAMETOOLONG
+
+
+def check_path(path: str | os.PathLike[str], *, what: str, error: type[SwarmtagError]) -> Path:
+    """``path`` if the system could name it (no NUL byte, no name or path too long), else ``error``.
+
+    Checks that ``stat`` would raise on (instead of answering "no such file") are refused
+    here with one line, before any ``exists()`` or ``is_dir()`` is asked.
+    """
+    name = os.fspath(path)
+    try:
+        os.stat(path)  # noqa: PTH116 - the error, not the answer, is wanted
+    except (FileNotFoundError, NotADirectoryError):
+        pass
+    except (OSError, ValueError) as problem:
+        reason = problem.strerror if isinstance(problem, OSError) else "not a valid path"
+        if not isinstance(problem, PermissionError):
+            msg = f"{what}: {name!r} cannot be used ({reason})"
+            raise error(msg) from None
+    return Path(path)
 
 
 def regular_file(path: str | os.PathLike[str], *, what: str, error: type[SwarmtagError]) -> Path:

@@ -32,6 +32,7 @@ import stat
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from typing import NoReturn
 
 from swarmtag._interrupt import deferred
 from swarmtag.errors import OutputError, SwarmtagError
@@ -43,7 +44,12 @@ STAGING_PREFIX = ".swarmtag-staging-"
 
 
 def _key(path: Path) -> str:
-    """One spelling per file: the real folder plus the name (the file itself may not exist)."""
+    """One spelling per file: the real folder plus the name (the file itself may not exist).
+
+    A path without a name of its own (``.``, ``..``, ``/``) is an existing folder: its real path.
+    """
+    if path.name in ("", ".."):
+        return os.path.realpath(path)
     return str(Path(os.path.realpath(path.parent)) / path.name)
 
 
@@ -71,9 +77,18 @@ class OutputPlan:
         self._folders: dict[str, tuple[str, Path]] = {}
         self._inputs: dict[str, tuple[str, Path]] = {}
 
-    def _fail(self, option: str, path: Path, reason: str) -> None:
+    def _fail(self, option: str, path: Path, reason: str) -> NoReturn:
         msg = f"{option}: {str(path)!r} {reason}"
         raise self._error(msg)
+
+    def _mode(self, option: str, path: Path, checked: Path) -> int | None:
+        """The file mode of ``checked`` (``path`` or its folder); None if there is none."""
+        try:
+            return checked.stat().st_mode
+        except FileNotFoundError:
+            return None
+        except OSError as problem:  # a name too long, a loop of links, a file as a folder
+            self._fail(option, path, f"cannot be checked ({problem.strerror})")
 
     def _claim(self, option: str, path: Path) -> str:
         """Refuse a path already named by another output or an input; else its key."""
@@ -86,13 +101,21 @@ class OutputPlan:
         return key
 
     def _check_folder(self, option: str, path: Path, folder: Path) -> None:
-        if not folder.is_dir():
-            reason = "is not a folder" if folder.exists() else "does not exist"
+        mode = self._mode(option, path, folder)
+        if mode is None or not stat.S_ISDIR(mode):
+            reason = "does not exist" if mode is None else "is not a folder"
             self._fail(option, path, f"cannot be written: folder {str(folder)!r} {reason}")
 
     def input(self, option: str, path: Path) -> None:
         """Note an input file, so that no output overwrites it."""
         self._inputs[_key(path)] = (option, path)
+
+    def appended(self, option: str, path: Path) -> None:
+        """Note a file read and appended to while the command works (a cache; not staged).
+
+        It may be no other input and no output.
+        """
+        self._inputs[self._claim(option, path)] = (option, path)
 
     def file(self, option: str, path: Path, *, suffixes: Sequence[str] = ()) -> Path:
         """Plan the file ``path`` for ``option``; refuse it now if it could not be written."""
@@ -101,12 +124,7 @@ class OutputPlan:
         if suffixes and path.suffix.lower() not in suffixes:
             self._fail(option, path, f"must end in {' or '.join(suffixes)}")
         self._check_folder(option, path, path.parent)
-        try:
-            mode = path.stat().st_mode
-        except FileNotFoundError:
-            mode = None
-        except OSError as problem:
-            self._fail(option, path, f"cannot be checked ({problem.strerror})")
+        mode = self._mode(option, path, path)
         if mode is not None and stat.S_ISDIR(mode):
             self._fail(option, path, "is a folder; give a file name")
         if mode is not None and not stat.S_ISREG(mode):
@@ -118,15 +136,22 @@ class OutputPlan:
         """Plan the folder ``path`` (created if missing; its parent must exist)."""
         if "\0" in str(path) or not str(path):
             self._fail(option, path, "is not a valid path")
-        if path.exists() and not path.is_dir():
+        if path.name in ("", ".."):  # "." or "..": staged beside it, under its real name
+            path = Path(os.path.realpath(path))
+            if not path.name:
+                self._fail(option, path, "cannot be written (the root folder)")
+        mode = self._mode(option, path, path)
+        if mode is not None and not stat.S_ISDIR(mode):
             self._fail(option, path, "is a file; give a folder")
-        if not path.exists():
+        if mode is None:
             self._check_folder(option, path, path.parent)
         self._folders[self._claim(option, path)] = (option, path)
         return path
 
-    def _staging_root(self, option: str, path: Path, folder: Path) -> Path:
+    def _staging_root(self, option: str, path: Path, folder: Path, roots: dict[str, Path]) -> Path:
+        """A new staging folder in ``folder``, noted in ``roots`` first (so Ctrl-C removes it)."""
         root = folder / f"{STAGING_PREFIX}{secrets.token_hex(6)}"
+        roots[os.path.realpath(folder)] = root
         try:
             root.mkdir()
         except OSError as problem:
@@ -146,7 +171,7 @@ class OutputPlan:
             for key, (option, path), is_folder in planned:
                 where = os.path.realpath(path.parent)
                 if where not in roots:
-                    roots[where] = self._staging_root(option, path, path.parent)
+                    self._staging_root(option, path, path.parent, roots)
                 temp = roots[where] / path.name
                 if is_folder:
                     temp.mkdir()

@@ -226,3 +226,18 @@ def test_an_event_log_too_large_for_memory_is_refused_before_reading(tmp_path, c
     monkeypatch.setenv("SWARMTAG_MEMORY_LIMIT", "100KiB")
     err = refused(capsys, tmp_path, "metrics", str(example_trial_path()))
     assert "example_trial.csv (7.4 KiB) needs about" in err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["study", "run", "x" * 300, "--workers", "1"],
+        ["study", "report", "x" * 300],
+        ["study", "run", "--out", "x" * 300, "--workers", "1", "preliminary-sweep"],
+        ["reproduce", "--study", "x" * 300],
+    ],
+)
+def test_names_too_long_for_a_path_are_one_line(tmp_path, capsys, monkeypatch, argv):
+    monkeypatch.chdir(tmp_path)
+    err = refused(capsys, tmp_path, *argv)
+    assert "xxx" in err

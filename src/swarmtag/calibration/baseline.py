@@ -16,6 +16,7 @@ from typing import Final
 
 import numpy as np
 
+from swarmtag._inputs import is_regular_file
 from swarmtag.analysis import CORE_METRICS, ConditionRuns, summarize
 from swarmtag.calibration.registry import target_path
 from swarmtag.calibration.spec import (
@@ -129,7 +130,7 @@ def load_baseline(text: str, *, condition: str | None = None) -> Targets:
     """
     path = Path(text)
     if path.suffix.lower() in EVENT_LOG_SUFFIXES:
-        if not path.is_file():
+        if not is_regular_file(path):
             raise CalibrationError(f"--baseline {text}: no such event log")
         log = read_event_log(path)
         return targets_from_log(
@@ -139,6 +140,6 @@ def load_baseline(text: str, *, condition: str | None = None) -> Targets:
         msg = "--condition picks an event log's condition; a target file names its own "
         msg += "([calibration] condition)"
         raise CalibrationError(msg)
-    if text.endswith(".toml") or path.is_file():
+    if text.endswith(".toml") or is_regular_file(path):
         return read_target_file(path, source=text)
     return read_target_file(target_path(text), source=text)

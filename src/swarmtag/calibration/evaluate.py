@@ -11,7 +11,6 @@ run order, so the result does not depend on ``workers`` either.
 from __future__ import annotations
 
 import math
-import multiprocessing
 import signal
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -19,6 +18,7 @@ from dataclasses import dataclass
 from types import TracebackType
 from typing import Final
 
+from swarmtag._pools import spawn_context, stop
 from swarmtag.calibration.cache import CacheEntry, EvaluationCache
 from swarmtag.calibration.objective import Achieved, KpiFit, achieved_kpis, fit_rows, objective
 from swarmtag.calibration.problem import CalibrationProblem
@@ -67,7 +67,7 @@ def chunk_runs(runs: int, workers: int) -> int:
 
 
 def _ignore_interrupt() -> None:
-    """Worker initialiser: Ctrl-C is the parent's to handle (it cancels and shuts down)."""
+    """Worker initialiser: Ctrl-C is the parent's to handle (it ends the workers)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -87,7 +87,7 @@ class Evaluator:
     """Evaluates points of ``problem`` through ``cache``, in ``workers`` processes.
 
     Use it as a context manager: the pool (``workers > 1``) starts with the
-    first evaluation and is shut down on exit, cancelling queued work on an
+    first evaluation and is shut down on exit, its workers ended at once on an
     error or Ctrl-C; every finished point is in the cache by then.
     ``on_result`` is called with each evaluation as it finishes.
     """
@@ -119,9 +119,17 @@ class Evaluator:
         error: BaseException | None,
         traceback: TracebackType | None,
     ) -> None:
-        if self._pool is not None:
+        if self._pool is not None and kind is not None:
+            self._stop()
+        elif self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
+
+    def _stop(self) -> None:
+        """End the workers now: after an error or Ctrl-C their running jobs are not awaited."""
+        if self._pool is not None:
+            pool, self._pool = self._pool, None
+            stop(pool)
 
     def _score(
         self, values: Mapping[str, float], achieved: Achieved, *, cached: bool
@@ -214,9 +222,9 @@ class Evaluator:
     ) -> dict[int, Evaluation]:
         """Run every job in the pool; finish each point as soon as all its chunks are in."""
         if self._pool is None:
-            context = multiprocessing.get_context("spawn")  # workers share nothing with us
+            # Spawned workers share nothing with us and leave Ctrl-C to us (see _pools).
             self._pool = ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=context, initializer=_ignore_interrupt
+                max_workers=self.workers, mp_context=spawn_context(), initializer=_ignore_interrupt
             )
         waiting = {index: len(batch) for index, batch in jobs.items()}
         done: dict[int, list[tuple[SimJob, CarrierLog]]] = {index: [] for index in jobs}
@@ -236,8 +244,7 @@ class Evaluator:
                         results[job.point] = self._finish(todo[job.point], done[job.point])
                         self._report(results[job.point])
         except BaseException:
-            for future in remaining:
-                future.cancel()
+            self._stop()
             raise
         return results
 

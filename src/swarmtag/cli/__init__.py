@@ -31,4 +31,12 @@ def main(argv: Sequence[str] | None = None) -> None:
             sys.exit(130)
         run(argv)
     finally:
-        restore()
+        if argv is None:
+            # This process is the command and ends with it: a Ctrl-C from here on (exit
+            # handlers, interpreter shutdown) could only turn its exit status into a
+            # traceback or a death by signal. Ignored, it ends with the status it has.
+            import signal  # noqa: PLC0415 - loaded already, by install()
+
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        else:
+            restore()

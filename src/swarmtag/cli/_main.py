@@ -8,6 +8,7 @@ from collections.abc import Sequence
 import click
 
 from swarmtag import __version__
+from swarmtag._checks import show
 from swarmtag._interrupt import checkpoint
 from swarmtag.cli.calibrate import calibrate_cmd
 from swarmtag.cli.demo import demo
@@ -73,6 +74,9 @@ def run(argv: Sequence[str] | None = None) -> None:
 
     ``swarmtag.cli.main`` installs the SIGINT handler before calling this.
     """
+    for position, word in enumerate(argv or (), start=1):
+        if "\0" in word:  # no shell can pass one; click's path checks would raise ValueError
+            _fail(f"argument {position} ({show(word)}) contains a NUL byte", EXIT_BAD_INPUT)
     try:
         try:
             result = app.main(args=argv, prog_name="swarmtag", standalone_mode=False)

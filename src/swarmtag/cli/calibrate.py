@@ -26,6 +26,7 @@ from rich.table import Table
 
 from swarmtag._atomic import atomic_write_bytes
 from swarmtag._checks import MAX_WORKERS
+from swarmtag._inputs import is_regular_file
 from swarmtag._outputs import OutputPlan
 from swarmtag.calibration import (
     DEFAULT_EVALUATIONS,
@@ -50,20 +51,31 @@ from swarmtag.sim.profiles import DEFAULT_PROFILE, load_profile, write_profile_f
 __all__ = ["calibrate_cmd", "command_line"]
 
 
-def _plan_outputs(profile: str, out: Path, report: Path | None, cache_file: Path) -> OutputPlan:
-    """Refuse output paths before any work; the cache (appended while working) is checked too."""
+def _plan_outputs(
+    baseline: str, profile: str, out: Path, report: Path | None, cache_path: Path | None
+) -> tuple[OutputPlan, Path]:
+    """Refuse output paths before any work; the cache (appended while working) is checked too.
+
+    Returns the plan and the cache file (by default named after ``out``, once that is checked).
+    """
     plan = OutputPlan(error=CalibrationError)
-    if Path(profile).is_file():
-        plan.input("--profile", Path(profile))
+    for option, source in (("--baseline", baseline), ("--profile", profile)):
+        if is_regular_file(source):
+            plan.input(option, Path(source))
     plan.file("--out", out, suffixes=(".toml",))
+    cache_file = cache_path if cache_path is not None else default_cache_path(out)
     if report is not None:
         plan.file("--report", report, suffixes=(".md",))
-    if not cache_file.parent.is_dir():
-        raise CalibrationError(f"--cache: folder {str(cache_file.parent)!r} does not exist")
-    if cache_file.exists() and not cache_file.is_file():
-        raise CalibrationError(f"--cache: {str(cache_file)!r} is not a regular file")
-    plan.input("--cache", cache_file)
-    return plan
+    try:
+        if not cache_file.parent.is_dir():
+            raise CalibrationError(f"--cache: folder {str(cache_file.parent)!r} does not exist")
+        if cache_file.exists() and not cache_file.is_file():
+            raise CalibrationError(f"--cache: {str(cache_file)!r} is not a regular file")
+    except OSError as problem:  # a name too long for the platform
+        msg = f"--cache: {str(cache_file)!r} cannot be checked ({problem.strerror})"
+        raise CalibrationError(msg) from None
+    plan.appended("--cache", cache_file)
+    return plan, cache_file
 
 
 def command_line(
@@ -204,8 +216,7 @@ def calibrate_cmd(
     Sobol design and bounded Nelder-Mead search the bounds; evaluated points
     are cached, so an interrupted or repeated calibration resumes.
     """
-    cache_file = cache_path if cache_path is not None else default_cache_path(out)
-    plan = _plan_outputs(profile, out, report, cache_file)
+    plan, cache_file = _plan_outputs(baseline, profile, out, report, cache_path)
     base = load_profile(profile)
     fixed = dict(parse_set(text) for text in settings)
     targets = load_baseline(baseline, condition=condition)

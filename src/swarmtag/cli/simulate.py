@@ -68,7 +68,7 @@ def _policies(
 
 def _per_condition(path: Path, policy: Policy, several: bool) -> Path:
     """``snap.png`` for one condition; ``snap-urgency-alpha-0.7.png`` per condition for several."""
-    if not several:
+    if not several or not path.name:  # "." or "": no file name, refused as a folder when planned
         return path
     slug = re.sub(r"[^A-Za-z0-9.]+", "-", policy.name).strip("-")
     return path.with_name(f"{path.stem}-{slug}{path.suffix}")
@@ -230,7 +230,7 @@ def _draw(
 )
 @click.option(
     "--draw-run",
-    type=click.IntRange(0, MAX_RUN_INDEX),
+    type=click.IntRange(0, MAX_RUN_INDEX - 1),  # a run index: below 2**53, as --run-offset + i
     help="Run to draw or save with --snapshot/--animate/--trajectories [default: the first run].",
 )
 @baseline_option

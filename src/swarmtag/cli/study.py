@@ -11,6 +11,7 @@ from typing import Any
 import click
 
 from swarmtag._checks import MAX_RESAMPLES, MAX_WORKERS
+from swarmtag._inputs import check_path
 from swarmtag.errors import StudyError
 
 __all__ = ["reproduce", "study"]
@@ -88,6 +89,8 @@ def _studies(sources: Sequence[str], out_dir: Path | None) -> list[Any]:
 
     if sources:
         return [load_study(source) for source in sources]
+    if out_dir is not None:
+        check_path(out_dir, what="DIR", error=StudyError)
     names = [name for name in STUDIES if out_dir is None or (out_dir / name).is_dir()]
     if not names:
         msg = f"{out_dir}: no results of a shipped study here; name the study with --study"

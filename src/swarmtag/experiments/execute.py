@@ -9,11 +9,11 @@ result depends only on the job.
 from __future__ import annotations
 
 import importlib
-import multiprocessing
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from typing import Any, Final
 
+from swarmtag._pools import spawn_context, stop
 from swarmtag.errors import StudyError
 from swarmtag.experiments.chunks import ChunkJob, ChunkResult, simulate_chunk
 
@@ -30,18 +30,17 @@ def run_local(jobs: Sequence[ChunkJob], workers: int, on_done: OnDone) -> None:
         for job in jobs:
             on_done(job, simulate_chunk(job))
         return
-    # Spawned workers share nothing with this process (no forked database handle).
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures: dict[Future[ChunkResult], ChunkJob] = {
-            pool.submit(simulate_chunk, job): job for job in jobs
-        }
+    # Spawned workers share nothing with this process (no forked database handle), and
+    # leave Ctrl-C to it: on an error or an interrupt they are ended at once.
+    with ProcessPoolExecutor(max_workers=workers, mp_context=spawn_context()) as pool:
         try:
+            futures: dict[Future[ChunkResult], ChunkJob] = {
+                pool.submit(simulate_chunk, job): job for job in jobs
+            }
             for future in as_completed(futures):
                 on_done(futures[future], future.result())
         except BaseException:
-            for future in futures:
-                future.cancel()
+            stop(pool)
             raise
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Final
 
+from swarmtag._inputs import is_regular_file
 from swarmtag.errors import StudyError
 from swarmtag.experiments.spec import Study, read_study_file
 
@@ -46,6 +47,6 @@ def load_study(name_or_path: str | os.PathLike[str]) -> Study:
     path; any other string must be a shipped study's name.
     """
     text = os.fspath(name_or_path)
-    if isinstance(name_or_path, os.PathLike) or text.endswith(".toml") or Path(text).is_file():
+    if isinstance(name_or_path, os.PathLike) or text.endswith(".toml") or is_regular_file(text):
         return read_study_file(text)
     return read_study_file(study_path(text))

@@ -24,6 +24,7 @@ from typing import Any, Final
 
 from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._inputs import check_path, is_regular_file
 from swarmtag._outputs import OutputPlan
 from swarmtag.analysis import ConditionChoices, MetricsReport, choice_statistics, summarize
 from swarmtag.analysis.choice_tables import choices_html, choices_latex, choices_markdown
@@ -236,8 +237,8 @@ def write_report(
     event logs of every scale are exported as ``carriers.<fmt>`` and
     ``events.<fmt>`` (``export_format``: ``csv`` or ``parquet``).
     """
-    folder = Path(out_dir)
-    if not (folder / STORE_NAME).is_file():
+    folder = check_path(out_dir, what="DIR", error=StudyError)
+    if not is_regular_file(folder / STORE_NAME):
         msg = f"{folder}: no results store ({STORE_NAME}) here; run the studies first"
         raise StudyError(msg)
     plan = OutputPlan(error=StudyError)

@@ -19,15 +19,18 @@ Output folder layout::
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Final
+from types import TracebackType
+from typing import Any, Final, Self
 
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._inputs import check_path
 from swarmtag._resources import check_memory
 from swarmtag.analysis import summarize
 from swarmtag.analysis.resampling import bootstrap_memory
@@ -132,6 +135,40 @@ def check_study_memory(study: Study, runs: int, *, quick: bool = False) -> None:
     )
 
 
+class _Created:
+    """Paths a run creates, removed again if it fails (Ctrl-C included): it leaves no trace.
+
+    Those named by ``keep`` stay (the store and ``progress.json`` once they
+    hold a stored chunk); folders are removed only if empty.
+    """
+
+    def __init__(self, *paths: Path) -> None:
+        self._new = [path for path in paths if not path.exists()]
+        self._kept: set[Path] = set()
+
+    def keep(self, *paths: Path) -> None:
+        self._kept.update(paths)
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        trace: TracebackType | None,
+    ) -> None:
+        if kind is None:
+            return
+        gone = [path for path in self._new if path not in self._kept]
+        for path in gone:
+            if path.is_file():
+                path.unlink(missing_ok=True)
+        for path in sorted(gone, key=lambda path: len(path.parts), reverse=True):
+            with contextlib.suppress(OSError):  # absent, or not empty: kept
+                path.rmdir()
+
+
 def _prepare_folder(folder: Path, name: str) -> None:
     """The results folder and its study folder, or one line saying why they cannot be made."""
     if folder.exists() and not folder.is_dir():
@@ -143,8 +180,10 @@ def _prepare_folder(folder: Path, name: str) -> None:
     try:
         (folder / name).mkdir(parents=True, exist_ok=True)
         probe = folder / f".{name}.writable.tmp"
-        probe.touch()
-        probe.unlink()
+        try:
+            probe.touch()
+        finally:
+            probe.unlink(missing_ok=True)
     except OSError as problem:
         msg = f"--out: {str(folder)!r} cannot be written ({problem.strerror})"
         raise StudyError(msg) from None
@@ -173,50 +212,57 @@ def run_study(
     if workers is not None and workers < 1:
         msg = f"workers: {workers} is not an integer >= 1"
         raise StudyError(msg)
-    folder = Path(out_dir)
+    folder = check_path(out_dir, what="--out", error=StudyError)
+    check_path(folder / study.name / "progress.json", what="--out", error=StudyError)
     runs = study.run_count(quick=quick)
     check_study_memory(study, runs, quick=quick)
-    _prepare_folder(folder, study.name)
     study_dir = folder / study.name
     progress_path = study_dir / "progress.json"
     total = runs * len(study.conditions) * len(study.scales)
-    with ResultsStore(folder / STORE_NAME) as store:
-        jobs = sorted(plan_chunks(study, store, quick=quick), key=_cost, reverse=True)
-        todo = sum(job.runs for job in jobs)
-        done = total - todo
-        _write_progress(progress_path, done, total)
-        columns = (
-            TextColumn(study.name),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TextColumn("runs"),
-            TimeRemainingColumn(),
-        )
-        with Progress(*columns, disable=not progress, transient=True) as bar:
-            task = bar.add_task(study.name, total=total, completed=done)
+    stores = (folder / STORE_NAME, folder / f"{STORE_NAME}.wal", progress_path)
+    scale_dirs = [study_dir / scale.key for scale in study.scales]
+    with _Created(folder, study_dir, *stores, *scale_dirs) as created:
+        _prepare_folder(folder, study.name)
+        with ResultsStore(folder / STORE_NAME) as store:
+            jobs = sorted(plan_chunks(study, store, quick=quick), key=_cost, reverse=True)
+            todo = sum(job.runs for job in jobs)
+            done = total - todo
+            _write_progress(progress_path, done, total)
+            columns = (
+                TextColumn(study.name),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TextColumn("runs"),
+                TimeRemainingColumn(),
+            )
+            with Progress(*columns, disable=not progress, transient=True) as bar:
+                task = bar.add_task(study.name, total=total, completed=done)
 
-            def store_chunk(job: ChunkJob, logs: ChunkResult) -> None:
-                nonlocal done
-                done += store.write_chunk(job.key, *logs)
-                _write_progress(progress_path, done, total)
-                bar.update(task, completed=done)
+                def store_chunk(job: ChunkJob, logs: ChunkResult) -> None:
+                    nonlocal done
+                    done += store.write_chunk(job.key, *logs)
+                    created.keep(*stores)  # they hold completed work now: the next run resumes
+                    _write_progress(progress_path, done, total)
+                    bar.update(task, completed=done)
 
-            if scheduler is not None:
-                run_dask(jobs, scheduler, store_chunk)
-            else:
-                run_local(jobs, workers or os.cpu_count() or 1, store_chunk)
-        metrics: dict[str, dict[str, Any]] = {}
-        paths: dict[str, Path] = {}
-        resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
-        for scale in study.scales:
-            log = store.load_log(study_key(study, scale.key), study.conditions, runs)
-            report = summarize(log, baseline=study.baseline, n_resamples=resamples, seed=study.seed)
-            metrics[scale.key] = report.to_json()
-            path = study_dir / scale.key / "metrics.json"
-            path.parent.mkdir(exist_ok=True)
-            text = json.dumps(metrics[scale.key], indent=2, allow_nan=False) + "\n"
-            atomic_write_bytes(path, text.encode())
-            paths[scale.key] = path
+                if scheduler is not None:
+                    run_dask(jobs, scheduler, store_chunk)
+                else:
+                    run_local(jobs, workers or os.cpu_count() or 1, store_chunk)
+            metrics: dict[str, dict[str, Any]] = {}
+            paths: dict[str, Path] = {}
+            resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
+            for scale in study.scales:
+                log = store.load_log(study_key(study, scale.key), study.conditions, runs)
+                report = summarize(
+                    log, baseline=study.baseline, n_resamples=resamples, seed=study.seed
+                )
+                metrics[scale.key] = report.to_json()
+                path = study_dir / scale.key / "metrics.json"
+                path.parent.mkdir(exist_ok=True)
+                text = json.dumps(metrics[scale.key], indent=2, allow_nan=False) + "\n"
+                atomic_write_bytes(path, text.encode())
+                paths[scale.key] = path
     return StudyResult(
         study=study.name,
         store=folder / STORE_NAME,

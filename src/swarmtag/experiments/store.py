@@ -26,6 +26,7 @@ store at a time (DuckDB locks the file); workers never touch it.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -151,9 +152,13 @@ class ResultsStore:
         except duckdb.Error as error:
             msg = f"{self.path}: cannot open the results store ({error})"
             raise StoreError(msg) from None
-        if not read_only:
-            self._con.execute(SCHEMA_SQL)
-        self._carrier_rows = _CARRIER_ROWS.format(**self._optional_carrier_columns())
+        try:
+            if not read_only:
+                self._con.execute(SCHEMA_SQL)
+            self._carrier_rows = _CARRIER_ROWS.format(**self._optional_carrier_columns())
+        except BaseException:  # Ctrl-C included: no open handle (nor .wal) left behind
+            self._con.close()
+            raise
 
     def _optional_carrier_columns(self) -> dict[str, str]:
         """SQL for each optional carrier column: its name, or a typed NULL in an older store."""
@@ -264,7 +269,9 @@ class ResultsStore:
             )
             raise StoreError(msg) from None
         except BaseException:
-            con.execute("ROLLBACK")
+            # A Ctrl-C raised as COMMIT returns finds no transaction left to roll back.
+            with contextlib.suppress(duckdb.TransactionException):
+                con.execute("ROLLBACK")
             raise
         finally:
             for view in ("chunk_runs", "chunk_carriers", "chunk_events"):

@@ -34,6 +34,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Final
 
+from swarmtag._inputs import is_regular_file
 from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError
 from swarmtag.sim._mapping import merge_layers, scenario_fields
@@ -143,7 +144,7 @@ def read_profile_file(path: str | os.PathLike[str]) -> Profile:
 def load_profile(name_or_path: str | os.PathLike[str] = DEFAULT_PROFILE) -> Profile:
     """A shipped profile by name (``"lab"``) or a profile file by path (``"mine.toml"``)."""
     text = os.fspath(name_or_path)
-    if isinstance(name_or_path, os.PathLike) or text.endswith(".toml") or Path(text).is_file():
+    if isinstance(name_or_path, os.PathLike) or text.endswith(".toml") or is_regular_file(text):
         return read_profile_file(text)
     return read_profile_file(profile_path(text))
 

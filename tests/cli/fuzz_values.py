@@ -1,0 +1,601 @@
+"""The values the CLI fuzzer draws: files to make, option values good and bad, and outputs.
+
+Used by ``tests/cli/test_fuzz.py`` (see its docstring); kept apart so that each file
+holds one concept: what may be passed (here) and how invocations are run and judged.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import click
+from hypothesis import strategies as st
+
+from swarmtag.calibration.fit import MAX_EVALUATIONS
+from swarmtag.data import example_trial_path
+from swarmtag.sim import Scenario
+from swarmtag.sim._mapping import flat_keys
+
+# --- files an invocation may need ------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Made:
+    """A file-system object an invocation needs, made in its working folder before the call.
+
+    ``kind``: ``copy`` (a template), ``edit`` (a template changed by ``op``),
+    ``bytes`` (``data``), ``dir``, ``fifo``, ``tree`` (a template folder) or
+    ``parent`` (only the folder above ``name``).
+    """
+
+    name: str
+    kind: str
+    template: str = ""
+    op: tuple[Any, ...] = ()
+    data: bytes = b""
+
+
+Token = str | Made
+"""One word of an invocation: literal text, or a path made first."""
+
+TINY_STUDY = """\
+ticks = 20
+name = "tiny"
+conditions = ["proximity", "urgency:alpha=0.7"]
+runs = 2
+quick_runs = 1
+chunk_runs = 2
+resamples = 20
+profile = "base"
+
+[scenario]
+robots = 2
+carriers = 3
+"""
+TINY_TARGETS = """\
+[calibration]
+name = "tiny"
+description = "tiny"
+condition = "proximity"
+seed = 0
+free = ["timing.dock=0.5:8:log"]
+evaluations = 2
+
+[[setups]]
+name = "t"
+runs = 1
+scenario = { robots = 2, carriers = 3, ticks = 20 }
+
+[setups.kpis]
+deliveries_per_run = { value = 1, ci = [0.5, 1.5] }
+pa = { value = 0.5, ci = [0.2, 0.8], weight = 0 }
+"""
+TINY_SCENARIO = "robots = 2\ncarriers = 3\nticks = 20\n\n[camera]\nmemory = 2.0\n"
+
+
+NUMBER = re.compile(rb"-?\d+(?:\.\d+)?(?:e[+-]?\d+)?")
+
+
+def edit(data: bytes, op: tuple[Any, ...]) -> bytes:  # noqa: PLR0911 - one return per edit
+    """``data`` changed by ``op`` (see ``corruptions``)."""
+    name, *args = op
+    if name == "truncate":
+        return data[: int(len(data) * args[0])]
+    if name == "insert":
+        at = int(len(data) * args[0])
+        return data[:at] + args[1] + data[at:]
+    if name == "flip":
+        at = min(len(data) - 1, int(len(data) * args[0]))
+        return data[:at] + bytes([args[1]]) + data[at + 1 :]
+    if name == "random":
+        return args[0]
+    if name == "number":
+        matches = list(NUMBER.finditer(data)) or [re.search(rb"$", data)]
+        match = matches[args[0] % len(matches)]
+        assert match is not None
+        return data[: match.start()] + args[1] + data[match.end() :]
+    lines = data.split(b"\n")
+    at = args[0] % len(lines)
+    if name == "rows":
+        return b"\n".join(lines[: 1 + args[0]]) + b"\n"
+    if name == "drop":
+        return b"\n".join(lines[:at] + lines[at + 1 :])
+    if name == "repeat":
+        return b"\n".join([*lines[: at + 1], lines[at], *lines[at + 1 :]])
+    assert name == "line", op
+    return b"\n".join([*lines[:at], args[1], *lines[at + 1 :]])
+
+
+def make(token: Made, work: Path, templates: dict[str, Path]) -> None:
+    """Create ``token`` in ``work`` (once: a second token of the same name finds it made)."""
+    target = work / token.name
+    if token.kind == "parent":
+        target.parent.mkdir(parents=True, exist_ok=True)
+        return
+    if target.exists() or target.is_symlink():
+        return
+    target.parent.mkdir(parents=True, exist_ok=True)
+    if token.kind == "dir":
+        target.mkdir()
+    elif token.kind == "fifo":
+        os.mkfifo(target)
+    elif token.kind == "tree":
+        shutil.copytree(templates[token.template], target)
+    elif token.kind == "copy":
+        shutil.copyfile(templates[token.template], target)
+    elif token.kind == "edit":
+        target.write_bytes(edit(templates[token.template].read_bytes(), token.op))
+    else:
+        target.write_bytes(token.data)
+
+
+# --- values: a valid branch and a bad one for every option ------------------------------------
+
+
+@dataclass(frozen=True)
+class Values:
+    """What one option or argument takes: ``good`` values and ``bad`` ones.
+
+    ``rare``: a good value means slow work (pictures, HTML), so it is drawn a
+    quarter as often.
+    """
+
+    good: st.SearchStrategy[Token]
+    bad: st.SearchStrategy[Token]
+    rare: bool = False
+
+
+BOUNDARY = (
+    "0", "-1", "1", str(10**30), str(-(10**30)), str(2**53), str(2**53 + 1), str(2**63),
+    "1e308", "-1e308", "1e309", "-0.0", "0.0", "nan", "-nan", "inf", "-inf", "1e-320",
+    "", " ", "\0", "1\0", "a\nb", "\n", "\u00fc", "\u2028", "\U0001f916", "1.5", "0x10",
+    "1_000", " 7 ", "true", "--", "-", "=", "x" * 300,
+)  # fmt: skip
+"""Values at the edges of every type, as command-line text."""
+
+words = st.text(st.characters(exclude_categories=["Cs"]), max_size=12)
+junk = st.one_of(st.sampled_from(BOUNDARY), words)
+
+
+def texts(good: Sequence[str], bad: Sequence[str] = ()) -> Values:
+    """Strings: ``good`` ones; ``bad`` ones, boundaries and random words."""
+    return Values(st.sampled_from(good), st.one_of(st.sampled_from([*bad, ""]), junk))
+
+
+def integers(
+    low: int | None, high: int | None, good: tuple[int, int], *, top: bool = True
+) -> Values:
+    """Small valid integers (``good``); the range's edges, boundaries and words.
+
+    ``top=False`` leaves out the largest valid value (when it means a lot of work).
+    """
+    edges = {str(n) for n in (low, high if top else None) if n is not None}
+    edges |= {str(low - 1)} if low is not None else set()
+    edges |= {str(high + 1)} if high is not None else set()
+    bad = st.one_of(st.sampled_from(sorted(edges) or ["-1"]), junk)
+    return Values(st.integers(*good).map(str), bad)
+
+
+def floats(low: float, high: float) -> Values:
+    return Values(st.floats(low, high).map(repr), junk)
+
+
+def from_type(param: click.Parameter) -> Values:
+    """Values of a parameter nobody special-cased, from its click type alone."""
+    kind = param.type
+    if isinstance(kind, click.Choice):
+        choices = [str(c) for c in kind.choices]
+        return Values(
+            st.sampled_from(choices), st.one_of(st.sampled_from(choices).map(str.upper), junk)
+        )
+    if isinstance(kind, click.IntRange):
+        low, high = kind.min, kind.max
+        start = 0 if low is None else int(low)
+        return integers(low, high, (start, start + 3 if high is None else min(high, start + 3)))
+    if isinstance(kind, click.FloatRange):
+        return floats(float(kind.min or 0.0) + 0.05, float(kind.min or 0.0) + 5.0)
+    if kind is click.INT:
+        return integers(None, None, (0, 3))
+    if kind is click.FLOAT:
+        return floats(0.05, 5.0)
+    if kind is click.STRING:
+        return Values(words, junk)
+    msg = f"{param.name}: no values for click type {kind!r}; teach the fuzzer this option"
+    raise AssertionError(msg)
+
+
+# Paths ------------------------------------------------------------------------------------------------
+
+STEMS = ("out", "same", "\u00fcber", "new")
+"""Stems of new output names: shared by every option, so two options often name one file."""
+
+
+def file_output(*suffixes: str, rare: bool = False) -> Values:
+    """A file an option writes: new and existing files; every way a path can be wrong."""
+    right = st.sampled_from(suffixes)
+    wrong = st.sampled_from(
+        [s for s in (".txt", "", ".csv", ".toml", ".md", ".tmp") if s not in suffixes]
+    )
+    good = st.one_of(
+        st.builds(str.__add__, st.sampled_from(STEMS), right),
+        right.map(lambda s: Made(f"exists{s}", "bytes", data=b"old,contents\n")),
+        right.map(lambda s: Made(f"sub/out{s}", "parent")),
+        right.map(lambda s: f"upper{s.upper()}"),
+        right.map(lambda s: f"a\nb{s}"),
+    )
+    bad = st.one_of(
+        st.builds(str.__add__, st.sampled_from(STEMS), wrong),
+        right.map(lambda s: f"missing/out{s}"),
+        right.map(lambda s: Made(f"folder{s}", "dir")),
+        st.just(Made("dir", "dir")),
+        right.map(lambda s: Made(f"fifo{s}", "fifo")),
+        right.map(lambda s: f"/proc/x{s}"),
+        right.map(lambda s: "x" * 300 + s),
+        st.sampled_from(["", ".", "/", "-", ".." + suffixes[0]]),
+    )
+    return Values(good, bad, rare=rare)
+
+
+def folder_output() -> Values:
+    """A folder an option writes into (made if missing; its parent must exist)."""
+    new = st.one_of(
+        st.sampled_from(["figs", "out", "same", "new", ".", "a\nb"]),
+        st.just(Made("dir", "dir")),
+        st.just(Made("results", "tree", template="results")),
+    )
+    bad = st.one_of(
+        st.just(Made("exists.txt", "bytes", data=b"old\n")),
+        st.just(Made("fifo", "fifo")),
+        st.sampled_from(["missing/figs", "/proc/x", "", "x" * 300]),
+    )
+    return Values(new, bad)
+
+
+HUGE = (
+    b"1e308", b"1e309", b"-1e309", b"nan", b"inf", b"-inf", b"-0.0", b"1" + b"0" * 30,
+    b"9" * 400, b"1e-400", b"0x10", b"", b"\xff", b"-1", b"true", b'"x"', b"[]",
+)  # fmt: skip
+"""Replacements for one number of an input file."""
+LINES = (b"", b",,,,,,,,,,,", b"\xc3\xa9", b"\0\0", b"x = ", b"[", b"proximity,0", b"\r")
+"""Replacements for one line of an input file."""
+
+
+def corruptions(*, text: bool = True, lines: bool = True) -> st.SearchStrategy[tuple[Any, ...]]:
+    """Ways to break a file: truncate, insert NUL, flip a byte, random bytes; for text also
+    a huge number for one number, and (``lines``) only the first rows, a line dropped,
+    repeated or replaced. Study and target files get no line edits: without its ``ticks``
+    line a study or set-up would simulate the default 3,000 ticks.
+    """
+    fraction = st.floats(0.0, 1.0)
+    ops = [
+        st.tuples(st.just("truncate"), fraction),
+        st.tuples(st.just("insert"), fraction, st.sampled_from([b"\0", b"\xff\xfe", b"\n"])),
+        st.tuples(st.just("flip"), fraction, st.integers(0, 255)),
+        st.tuples(st.just("random"), st.binary(max_size=200)),
+    ]
+    index = st.integers(0, 400)
+    if text:
+        ops.append(st.tuples(st.just("number"), index, st.sampled_from(HUGE)))
+    if text and lines:
+        ops += [
+            st.tuples(st.just("rows"), st.integers(0, 6)),
+            st.tuples(st.just("drop"), index),
+            st.tuples(st.just("repeat"), index),
+            st.tuples(st.just("line"), index, st.sampled_from(LINES)),
+        ]
+    return st.one_of(*ops)
+
+
+def edited(
+    template: str, suffix: str, *, text: bool = True, lines: bool = True
+) -> st.SearchStrategy[Token]:
+    return st.builds(
+        lambda n, op: Made(f"bad{n}{suffix}", "edit", template=template, op=op),
+        st.integers(0, 3),
+        corruptions(text=text, lines=lines),
+    )
+
+
+def copy(template: str) -> st.SearchStrategy[Token]:
+    return st.just(Made(template, "copy", template=template))
+
+
+def not_a_file(suffix: str) -> st.SearchStrategy[Token]:
+    """Inputs that are no file: missing, a folder, a FIFO, a name too long for a path."""
+    return st.one_of(
+        st.sampled_from([f"missing{suffix}", f"missing/x{suffix}", "", "x" * 300]),
+        st.just(Made(f"folder{suffix}", "dir")),
+        st.just(Made(f"fifo{suffix}", "fifo")),
+        st.just(Made("exists.txt", "bytes", data=b"old\n")),
+    )
+
+
+def with_inputs(chosen: Values) -> Values:
+    """``chosen`` with, among the bad values, the files other options read."""
+    inputs = st.one_of(copy("targets.toml"), copy("profile.toml"), copy("trial.csv"))
+    return Values(chosen.good, st.one_of(chosen.bad, inputs), rare=chosen.rare)
+
+
+EVENT_LOG = Values(
+    st.one_of(
+        st.just(str(example_trial_path())),
+        copy("trial.csv"),
+        copy("small.csv"),
+        copy("small.parquet"),
+    ),
+    st.one_of(
+        edited("trial.csv", ".csv"),
+        edited("small.csv", ".csv"),
+        edited("small.parquet", ".parquet", text=False),
+        copy("small-table.csv"),
+        not_a_file(".csv"),
+        st.sampled_from(["events.txt", "/proc/x.csv", "-"]),
+    ),
+)
+"""A per-carrier event log to read: valid logs; corrupted copies, and no file at all."""
+EVENT_TABLE = Values(
+    st.one_of(copy("small-table.csv"), copy("small-table.parquet")),
+    st.one_of(
+        edited("small-table.csv", ".csv"),
+        edited("small-table.parquet", ".parquet", text=False),
+        copy("small.csv"),
+        copy("trial.csv"),
+        not_a_file(".csv"),
+    ),
+)
+"""A long-format event table to read."""
+
+TOML_VALUES = (
+    "0", "-1", "1", "1.5", "1e308", "nan", "inf", "-0.0", str(10**30), str(2**63), str(2**53),
+    '""', '"x"', '"\\u0000"', "[]", "{}", "true", '["proximity", "proximity"]',
+    '["urgency:alpa=3"]', '"static"', '"paper-sim"', '"lab"', "1979-05-27", '"x\\ny"',
+)  # fmt: skip
+"""Wrong and boundary values for one key of a TOML input."""
+
+
+def toml_edit(template: str, keys: Sequence[str]) -> st.SearchStrategy[Token]:
+    """A TOML template with one line replaced by ``key = value`` (wrong, boundary, unknown)."""
+    return st.builds(
+        lambda n, at, key, value: Made(
+            f"mut{n}.toml", "edit", template=template, op=("line", at, f"{key} = {value}".encode())
+        ),
+        st.integers(0, 3),
+        st.integers(0, 30),
+        st.sampled_from([*keys, "nope", "runs.x"]),
+        st.sampled_from(TOML_VALUES),
+    )
+
+
+STUDY_KEYS = (
+    "name", "conditions", "runs", "quick_runs", "chunk_runs", "resamples", "profile",
+    "robots", "carriers", "seed", "baseline", "urgency", "description", "scales",
+)  # fmt: skip
+
+
+def study_with(n: int, key: str, value: str) -> Made:
+    """The tiny study with ``key = value`` (replaced where it is set, else added at the top)."""
+    text, found = re.subn(rf"(?m)^{key} = .*$", lambda _: f"{key} = {value}", TINY_STUDY)
+    if not found:
+        text = f"{key} = {value}\n{text}"
+    return Made(f"mut{n}.toml", "bytes", data=text.encode())
+
+
+SHIPPED_STUDIES = (
+    "preliminary-sweep", "candidate-alphas", "controller-selection", "physical-style",
+    "scalability",
+)  # fmt: skip
+"""Shipped study names: real work, so an invocation naming one runs guarded."""
+STUDY_SOURCE = Values(
+    copy("study.toml"),
+    st.one_of(
+        edited("study.toml", ".toml", lines=False),
+        st.builds(
+            study_with,
+            st.integers(0, 3),
+            st.sampled_from(STUDY_KEYS),
+            st.sampled_from(TOML_VALUES),
+        ),
+        st.sampled_from([*SHIPPED_STUDIES, "Scalability", "no-such-study", "tiny"]),
+        not_a_file(".toml"),
+        words,
+    ),
+)
+"""A study file or a shipped study's name."""
+
+TARGET_EDITS = (
+    "runs = 1", "evaluations = 2", '"timing.dock=0.5:8:log"', "value = 1", "ci = [0.5, 1.5]",
+    'condition = "proximity"', "seed = 0", "robots = 2", "deliveries_per_run", "[[setups]]",
+    'name = "t"', "weight = 0",
+)  # fmt: skip
+BASELINE = Values(
+    copy("targets.toml"),
+    st.one_of(
+        edited("targets.toml", ".toml", lines=False),
+        st.builds(
+            lambda n, old, value: Made(
+                f"tmut{n}.toml", "bytes", data=TINY_TARGETS.replace(old, value, 1).encode()
+            ),
+            st.integers(0, 3),
+            st.sampled_from(TARGET_EDITS),
+            st.sampled_from(TOML_VALUES),
+        ),
+        st.sampled_from(["lab", "paper-sim", "Lab", "nope"]),
+        EVENT_LOG.good,
+        EVENT_LOG.bad,
+        not_a_file(".toml"),
+    ),
+)
+"""What ``calibrate --baseline`` reads; only the tiny target files run unguarded."""
+UNGUARDED_BASELINES = ("targets.toml",)
+"""Templates of the only calibration baselines that run unguarded (tiny and fast)."""
+
+PROFILE = Values(
+    st.one_of(st.sampled_from(["paper-sim", "lab", "base", "base"]), copy("profile.toml")),
+    st.one_of(
+        st.sampled_from(["BASE", "nope", "nope.toml"]),
+        edited("profile.toml", ".toml"),
+        toml_edit("profile.toml", ["tick", "perception", "detection_radius", "time_unit"]),
+        not_a_file(".toml"),
+        junk,
+    ),
+)
+CONFIG = Values(
+    copy("scenario.toml"),
+    st.one_of(
+        edited("scenario.toml", ".toml"),
+        toml_edit("scenario.toml", ["robots", "carriers", "ticks", "tick", "arena", "camera"]),
+        not_a_file(".toml"),
+    ),
+)
+
+SCENARIO = flat_keys(Scenario().to_mapping())
+CHEAP = {
+    "ticks": st.integers(1, 30),
+    "robots": st.integers(1, 4),
+    "urgency.static_time_limit": st.integers(1, 30),
+}
+"""Scenario keys whose own (default) value would make a simulation slow: small values instead."""
+
+
+def toml_literal(value: object) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return f'"{value}"'
+    return str(value)
+
+
+def set_items() -> Values:
+    """``KEY=VALUE`` with real scenario keys: their own values; boundaries and garbage."""
+    keys = [*SCENARIO, "arena", "camera..memory", "camera.memory.x", "nope", "", " ticks"]
+    own = st.sampled_from(sorted(k for k in SCENARIO if k not in CHEAP)).map(
+        lambda k: f"{k}={toml_literal(SCENARIO[k])}"
+    )
+    cheap = st.sampled_from(sorted(CHEAP)).flatmap(lambda k: CHEAP[k].map(lambda v: f"{k}={v}"))
+    garbage = st.builds(
+        "{}={}".format, st.sampled_from(keys), st.one_of(st.sampled_from(TOML_VALUES), junk)
+    )
+    malformed = st.sampled_from(["", "=", "=5", "ticks", "ticks==5", "[x]=1", "a=b=c"])
+    return Values(st.one_of(own, cheap), st.one_of(garbage, malformed))
+
+
+CONDITIONS = texts(
+    ["proximity", "urgency:alpha=0.7", "urgency:alpha=9", "weighted:w=0.5"],
+    ["Proximity", "urgency", "urgency:alpha=-1", "urgency:alpha=nan", "urgency:alpha=1e309",
+     "weighted:w=2", "urgency:alpa=3", "urgency:alpha=0.7,w=1", "x:y=z"],
+)  # fmt: skip
+FREE = texts(
+    ["timing.dock=0.5:8:log", "timing.dock=0.5:8", "motion.speed=0.1:0.5", "tick=0.05:0.2"],
+    ["timing.dock=8:0.5", "timing.dock=0:8:log", "timing.dock=1:1e309", "timing.dock=a:b",
+     "timing.dock", "timing.dock=1:2:ln", "nope=1:2", "robots=1:5", "ticks=1:10",
+     "perception=1:2", "timing.dock=-1e308:1e308", "timing.dock=nan:1"],
+)  # fmt: skip
+HEX = texts(
+    ["ffff0701030c", "0xffff0701030c", "ff:ff:07:01:03:0c", "FF-FF-07-01-03-0C",
+     "ff ff 07 01 03 0c"],
+    ["ffff0a01030c", "ffff0703030c", "feff0701030c", "ffff070103", "ffff0701030c00",
+     "ffff0701030", "zz", "0x"],
+)  # fmt: skip
+
+COMMON: dict[str, Values] = {
+    "conditions": CONDITIONS,
+    "settings": set_items(),
+    "profile": PROFILE,
+    "config": CONFIG,
+    "events": file_output(".csv", ".parquet"),
+    "event_table": file_output(".csv", ".parquet"),
+    "snapshot": file_output(".png", rare=True),
+    "animation": file_output(".gif", ".mp4", rare=True),
+    "trajectories_out": file_output(".npz"),
+    "baseline": texts(["proximity", "urgency:alpha=0.7", "urgency:alpha=3.0"], ["nope"]),
+    "resamples": integers(1, 10**9, (1, 50)),
+    "runs": integers(1, 2**53, (1, 3)),
+    "ticks": integers(1, None, (1, 30)),
+    "robots": integers(1, None, (1, 4)),
+    "carriers": integers(1, None, (1, 8)),
+    "w": floats(0.0, 1.0),
+    "workers": texts(["1"]),
+    "scheduler": texts(["tcp://127.0.0.1:9"]),
+    "sources": STUDY_SOURCE,
+    "source": STUDY_SOURCE,
+    "out_dir": folder_output(),
+    "status": texts(["idle", "awaiting_pickup", "PICKED_UP", "0", "1", "2"], ["3", "-1"]),
+    "hex_payload": HEX,
+    "name": PROFILE,
+}
+"""Values of the options and arguments a click type alone does not describe, by name."""
+BY_COMMAND: dict[tuple[str, ...], dict[str, Values]] = {
+    ("metrics",): {
+        "events": EVENT_LOG,
+        "event_table": EVENT_TABLE,
+        "markdown": file_output(".md", ".markdown"),
+        "latex": file_output(".tex"),
+        "html_out": file_output(".html", ".htm", rare=True),
+        "figures": Values(folder_output().good, folder_output().bad, rare=True),
+    },
+    ("study", "report"): {
+        "out_dir": Values(
+            st.just(Made("results", "tree", template="results")),
+            st.one_of(folder_output().good, folder_output().bad),
+            rare=True,  # a report draws figures: about a second
+        ),
+        "resamples": integers(1, None, (1, 50)),
+    },
+    ("reproduce",): {
+        "sources": Values(STUDY_SOURCE.good, STUDY_SOURCE.bad, rare=True),  # runs and reports
+    },
+    ("calibrate",): {
+        "baseline": BASELINE,
+        "out": with_inputs(file_output(".toml")),
+        "report": file_output(".md"),
+        "cache_path": with_inputs(file_output(".jsonl", ".cache")),
+        "free": FREE,
+        "name": texts(["mine", "tiny", "a b"]),
+        "condition": texts(["proximity"], ["urgency:alpha=0.7", "nope"]),
+        "runs": integers(None, None, (1, 2)),
+        "seed": integers(None, None, (0, 5)),
+        "evaluations": integers(1, MAX_EVALUATIONS, (1, 3), top=False),
+    },
+}
+"""Values that differ by command (``--baseline`` of metrics and of calibrate, ...)."""
+INPUTS = {
+    ("metrics",): ("events", "event_table"),
+    ("simulate",): ("config", "profile"),
+    ("calibrate",): ("baseline", "profile"),
+    ("study", "run"): ("source",),
+    ("study", "report"): ("sources",),
+    ("reproduce",): ("sources",),
+    ("profiles",): ("name",),
+}
+"""Parameters that name files a command reads (which no success may change), by command."""
+
+
+def values(path: tuple[str, ...], param: click.Parameter) -> Values:
+    name = param.name or ""
+    chosen = BY_COMMAND.get(path, {}).get(name) or COMMON.get(name)
+    return from_type(param) if chosen is None else chosen
+
+
+# --- invocations ------------------------------------------------------------------------------
+
+OUTPUTS: dict[tuple[str, ...], dict[str, str]] = {
+    ("simulate",): {
+        "events": "file",
+        "event_table": "file",
+        "snapshot": "per-condition",
+        "animation": "per-condition",
+        "trajectories_out": "per-condition",
+    },
+    ("metrics",): {"markdown": "file", "latex": "file", "html_out": "file", "figures": "folder"},
+    ("calibrate",): {"out": "file", "report": "file", "cache_path": "optional"},
+    ("study", "run"): {"out_dir": "folder"},
+    ("study", "report"): {"out_dir": "folder"},
+    ("reproduce",): {"out_dir": "folder"},
+}
+"""The outputs of each command, by parameter name: what a success must have written."""

@@ -1,0 +1,524 @@
+"""A Hypothesis fuzzer of every ``swarmtag`` command: refused input is one line, never a trace.
+
+Each test draws random invocations of one command: a random subset of the
+options that the click command object itself declares (read from
+``swarmtag.cli._main.app``), each with a value that is valid, at a boundary
+(0, -1, 10**30, 1e308, -0.0, nan, inf, empty, NUL, newline, unicode), of the
+wrong type or a random word; paths are new names with right and wrong
+suffixes, missing folders, folders, regular files, FIFOs, ``/proc`` (which
+even root cannot write), or one name given to two options; inputs are the
+shipped example trial, small valid logs and study/target/profile files, and
+corrupted copies of them. How often a value is a bad one is drawn per
+invocation, so that some invocations are wholly valid and reach deep.
+
+Every invocation must exit 0 or 2; exit 2 prints exactly one
+``swarmtag: error:`` line on stderr and no help on stdout (a command may
+have said what it started); no invocation prints a traceback; a failing one
+leaves its working folder exactly as it was (no staging folder, no
+``*.tmp``), a succeeding one writes every output it names and nothing else.
+
+Invocations are kept cheap: simulations get at most 30 ticks (and a static
+time limit of 30) unless those are drawn, resample, run and evaluation counts
+are small in the valid branch, one worker process, and
+``SWARMTAG_MEMORY_LIMIT`` is 2 GiB so that huge requests are refused at once.
+The few inputs that would start real work (shipped studies, shipped
+calibration baselines, event-log baselines) run under a 1 KiB limit, which
+refuses them before their first simulation.
+
+The seed is fixed (0) and printed with every failure; pin another one, and
+ask for more invocations in all (shared out over the commands as in the
+normal mode)::
+
+    SWARMTAG_FUZZ_SEED=7 SWARMTAG_FUZZ_EXAMPLES=20000 \\
+        pytest -q -p no:cacheprovider tests/cli/test_fuzz.py
+
+``-rP`` shows each test's line: invocations, successes, time, slowest calls.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import shutil
+import signal
+import stat
+import tempfile
+import time
+import traceback
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import click
+import pytest
+from hypothesis import HealthCheck, Phase, given, seed, settings
+from hypothesis import strategies as st
+
+from swarmtag._outputs import STAGING_PREFIX
+from swarmtag._resources import MEMORY_LIMIT_VARIABLE
+from swarmtag.calibration import default_cache_path
+from swarmtag.cli import main
+from swarmtag.cli._main import app
+from swarmtag.data import example_trial_path
+from swarmtag.sim.profiles import profile_path
+from tests.cli.fuzz_values import (
+    CHEAP,
+    INPUTS,
+    OUTPUTS,
+    SHIPPED_STUDIES,
+    TINY_SCENARIO,
+    TINY_STUDY,
+    TINY_TARGETS,
+    UNGUARDED_BASELINES,
+    Made,
+    Token,
+    Values,
+    junk,
+    make,
+    values,
+)
+
+SEED = int(os.environ.get("SWARMTAG_FUZZ_SEED", "0"))
+"""Hypothesis seed of every fuzz test (``SWARMTAG_FUZZ_SEED``)."""
+NORMAL_EXAMPLES = {
+    (): 120,
+    ("tag", "encode"): 200,
+    ("tag", "decode"): 180,
+    ("metrics",): 330,
+    ("simulate",): 400,
+    ("study", "run"): 160,
+    ("study", "report"): 110,
+    ("reproduce",): 100,
+    ("profiles",): 150,
+    ("calibrate",): 250,
+    ("demo",): 8,
+}
+"""Invocations per command in the normal suite (2,008 in all)."""
+TOTAL = int(os.environ.get("SWARMTAG_FUZZ_EXAMPLES", "0")) or sum(NORMAL_EXAMPLES.values())
+"""Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``."""
+HANG_SECONDS = 60
+"""One invocation running longer than this is reported as a hang."""
+MEMORY = "2GiB"
+"""The memory limit of every invocation: huge requests are refused, not attempted."""
+GUARD_MEMORY = "1KiB"
+"""The limit of invocations whose input would start real work: refused before it starts."""
+BADNESS = (3, 20, 50, 90)
+"""Percent chances that an invocation's values are bad ones, one drawn per invocation."""
+
+
+def examples(path: tuple[str, ...]) -> int:
+    share = NORMAL_EXAMPLES[path] * TOTAL / sum(NORMAL_EXAMPLES.values())
+    return max(1, round(share))
+
+
+def walk(group: click.Group, prefix: tuple[str, ...] = ()) -> dict[tuple[str, ...], click.Command]:
+    """Every command under ``group``, by its words (``("study", "run")``)."""
+    found: dict[tuple[str, ...], click.Command] = {}
+    for name, command in group.commands.items():
+        if isinstance(command, click.Group):
+            found.update(walk(command, (*prefix, name)))
+        else:
+            found[(*prefix, name)] = command
+    return found
+
+
+COMMANDS = walk(app)
+
+
+# --- the files every working folder may copy -------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def templates(tmp_path_factory) -> dict[str, Path]:
+    """What working folders copy: logs, tables, study, targets, scenario, profile, results."""
+    from swarmtag.experiments import load_study, run_study
+    from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
+    from swarmtag.policy import Proximity, Urgency
+    from swarmtag.sim import simulate
+    from swarmtag.sim.profiles import load_profile
+
+    folder = tmp_path_factory.mktemp("fuzz-templates")
+    scenario = load_profile("base").scenario({"robots": 2, "carriers": 3, "ticks": 300})
+    results = [simulate(scenario, p, seed=0, runs=2) for p in (Proximity(), Urgency(alpha=0.7))]
+    log = CarrierLog.concat([result.carriers for result in results])
+    table = EventTable.concat([result.events for result in results])
+    for suffix in (".csv", ".parquet"):
+        write_event_log(log, folder / f"small{suffix}")
+        write_event_table(table, folder / f"small-table{suffix}")
+    shutil.copy(example_trial_path(), folder / "trial.csv")
+    (folder / "study.toml").write_text(TINY_STUDY, encoding="utf-8")
+    (folder / "targets.toml").write_text(TINY_TARGETS, encoding="utf-8")
+    (folder / "scenario.toml").write_text(TINY_SCENARIO, encoding="utf-8")
+    profile = profile_path("base").read_text(encoding="utf-8")
+    (folder / "profile.toml").write_text(profile.replace('name = "base"', 'name = "mine"'))
+    run_study(load_study(str(folder / "study.toml")), out_dir=folder / "results", workers=1)
+    return {path.name: path for path in folder.iterdir()}
+
+
+JUNK = ("--no-such-option", "-z", "extra", "--", "--help", "-h")
+"""Words no command takes (or help), slipped in now and then."""
+
+
+@dataclass
+class Invocation:
+    """A drawn command line: its words, its outputs, and whether it must run guarded."""
+
+    argv: list[Token]
+    outputs: list[tuple[str, Token]] = field(default_factory=list)
+    guarded: bool = False
+    given: dict[str, list[Token]] = field(default_factory=dict)
+    path: tuple[str, ...] = ()
+    made: list[Made] = field(default_factory=list)
+
+
+def draw_value(draw: st.DrawFn, chosen: Values, badness: int) -> Token:
+    if (chosen.rare and draw(st.integers(0, 3))) or draw(st.integers(0, 99)) < badness:
+        return draw(chosen.bad)
+    return draw(chosen.good)
+
+
+def draw_words(
+    draw: st.DrawFn, path: tuple[str, ...], param: click.Parameter, call: Invocation, badness: int
+) -> list[Token]:
+    """The words of one option or argument, noting its values in ``call.given``."""
+    name = param.name or ""
+    if isinstance(param, click.Option) and param.is_flag:
+        return [draw(st.sampled_from([*param.opts, *param.secondary_opts]))]
+    found: list[Token] = []
+    repeats = draw(st.integers(1, 3)) if getattr(param, "multiple", False) else 1
+    for _ in range(repeats):
+        value = draw_value(draw, values(path, param), badness)
+        call.given.setdefault(name, []).append(value)
+        found += (
+            [draw(st.sampled_from(param.opts)), value]
+            if isinstance(param, click.Option)
+            else [value]
+        )
+    return found
+
+
+@st.composite
+def invocations(draw: st.DrawFn, path: tuple[str, ...]) -> Invocation:
+    """Random options (required ones nine times in ten), arguments, now and then junk."""
+    command = COMMANDS[path]
+    badness = draw(st.sampled_from(BADNESS))
+    options = [p for p in command.params if isinstance(p, click.Option)]
+    chosen = draw(st.lists(st.sampled_from(options), unique_by=lambda p: p.name)) if options else []
+    chosen += [p for p in options if p.required and p not in chosen and draw(st.integers(0, 9))]
+    call = Invocation([], path=path)
+    groups = [draw_words(draw, path, option, call, badness) for option in chosen]
+    for argument in (p for p in command.params if isinstance(p, click.Argument)):
+        if draw(st.integers(0, 19)) if argument.required else draw(st.booleans()):
+            at = draw(st.integers(0, len(groups)))
+            groups.insert(at, draw_words(draw, path, argument, call, badness))
+    if draw(st.integers(0, 19)) == 0:
+        groups.insert(draw(st.integers(0, len(groups))), [draw(st.sampled_from(JUNK))])
+    call.argv = [*path, *(word for group in groups for word in group)]
+    defaults = {p.name: p.default for p in command.params}
+    for name, kind in OUTPUTS.get(path, {}).items():
+        default = defaults[name]
+        fallback = [str(default)] if isinstance(default, str | Path) else []
+        call.outputs += [(kind, value) for value in (call.given.get(name) or fallback)[-1:]]
+    out = call.given.get("out", [])
+    if path == ("calibrate",) and not call.given.get("cache_path") and out:
+        with contextlib.suppress(ValueError):  # a name calibrate refuses anyway
+            call.outputs.append(("optional", str(default_cache_path(Path(word(out[-1]))))))
+    return cheap(draw, path, call)
+
+
+def cheap(draw: st.DrawFn, path: tuple[str, ...], call: Invocation) -> Invocation:
+    """Keep the call cheap: short runs, few resamples, one worker, real work guarded."""
+    settings_ = [word(v) for v in call.given.get("settings", [])]
+    if path in (("simulate",), ("calibrate",)):
+        # calibrate refuses --set ticks (the set-ups set their own run length)
+        for key in ("ticks", "urgency.static_time_limit")[path == ("calibrate",) :]:
+            flag = call.given.get(key) if key == "ticks" else None
+            if not flag and not any(text.startswith(f"{key}=") for text in settings_):
+                call.argv += ["--set", f"{key}={draw(CHEAP[key])}"]
+    if path == ("reproduce",) and draw(st.booleans()):
+        call.made.append(Made("out", "dir"))  # so that the default --out out/reproduction works
+    if path in (("simulate",), ("metrics",)) and not call.given.get("resamples"):
+        call.argv += ["--resamples", str(draw(st.integers(1, 50)))]
+    if path == ("simulate",) and not call.given.get("runs"):
+        call.argv += ["--runs", str(draw(st.integers(1, 3)))]  # not the default 30
+    if path in (("study", "run"), ("reproduce",), ("calibrate",)) and not call.given.get("workers"):
+        call.argv += ["--workers", "1"]
+    if path in (("study", "run"), ("reproduce",)):
+        sources = [word(v) for v in call.given.get("source", []) + call.given.get("sources", [])]
+        shipped = any(s.lower() in SHIPPED_STUDIES for s in sources)
+        call.guarded = shipped or (path == ("reproduce",) and not sources)
+    if path == ("calibrate",):
+        call.guarded = not all(
+            isinstance(v, Made) and v.template in UNGUARDED_BASELINES
+            for v in call.given.get("baseline", [])
+        )
+    return call
+
+
+# --- running and checking one invocation ------------------------------------------------------
+
+
+class Hang(BaseException):
+    """An invocation ran past ``HANG_SECONDS``."""
+
+
+@contextlib.contextmanager
+def watchdog(seconds: float) -> Iterator[None]:
+    def alarm(_signum: int, _frame: object) -> None:
+        raise Hang
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+Snapshot = dict[str, tuple[str, int, int]]
+
+
+def snapshot(root: Path) -> Snapshot:
+    """Every path under ``root``: its kind, and size and mtime for regular files."""
+    found = {}
+    for folder, dirs, files in os.walk(root):
+        for name in [*dirs, *files]:
+            path = Path(folder) / name
+            info = path.lstat()
+            if stat.S_ISREG(info.st_mode):
+                found[str(path.relative_to(root))] = ("file", info.st_size, info.st_mtime_ns)
+            else:
+                kind = "dir" if stat.S_ISDIR(info.st_mode) else "other"
+                found[str(path.relative_to(root))] = (kind, 0, 0)
+    return found
+
+
+def word(token: Token) -> str:
+    return token.name if isinstance(token, Made) else token
+
+
+def local(token: Token) -> str | None:
+    """An output's path relative to the working folder, or None if it lies elsewhere."""
+    text = word(token) or "."  # click reads "" as Path(""), the current folder
+    if text.startswith("/") or "\0" in text:
+        return None
+    return os.path.normpath(text)
+
+
+def allowed(rel: str, outputs: Sequence[tuple[str, Token]]) -> bool:
+    """Whether a success may have written ``rel``: an output, inside a folder output, or a
+    per-condition picture (``snap-proximity.png`` for ``--snapshot snap.png``).
+    """
+    for kind, token in outputs:
+        target = local(token)
+        if target is None:
+            continue
+        if rel == target or (kind == "folder" and (target == "." or rel.startswith(target + "/"))):
+            return True
+        if kind == "per-condition":
+            suffix = Path(target).suffix
+            stem = target.removesuffix(suffix)
+            if rel.startswith(stem + "-") and rel.endswith(suffix) and "/" not in rel[len(stem) :]:
+                return True
+    return False
+
+
+def not_written(outputs: Sequence[tuple[str, Token]]) -> list[str]:
+    """The outputs a success named but did not write."""
+    missing = []
+    for kind, token in outputs:
+        target = local(token)
+        if target is None or kind == "optional":
+            continue
+        path = Path(target)
+        variants = path.parent.glob(re.sub(r"([*?\[])", r"[\1]", path.stem) + f"-*{path.suffix}")
+        there = {
+            "folder": path.is_dir,
+            "file": path.is_file,
+            "per-condition": lambda: path.is_file() or any(variants),  # noqa: B023
+        }[kind]()
+        if not there:
+            missing.append(target)
+    return missing
+
+
+@dataclass
+class Fuzzer:
+    """Runs invocations in fresh working folders under ``root`` and checks each one."""
+
+    root: Path
+    templates: dict[str, Path]
+    capsys: pytest.CaptureFixture[str]
+    monkeypatch: pytest.MonkeyPatch
+    count: int = 0
+    seconds: float = 0.0
+    successes: int = 0
+    slowest: list[tuple[float, list[str]]] = field(default_factory=list)
+
+    def run(self, call: Invocation) -> None:
+        work = Path(tempfile.mkdtemp(prefix="w", dir=self.root))
+        for token in [*call.argv, *call.made]:
+            if isinstance(token, Made):
+                make(token, work, self.templates)
+        argv = [word(token) for token in call.argv]
+        self.monkeypatch.chdir(work)
+        self.monkeypatch.setenv(MEMORY_LIMIT_VARIABLE, GUARD_MEMORY if call.guarded else MEMORY)
+        before = snapshot(work)
+        self.capsys.readouterr()
+        code: object = None
+        crash = ""
+        started = time.perf_counter()
+        try:
+            with watchdog(HANG_SECONDS):
+                main(argv)
+        except SystemExit as exited:
+            code = exited.code
+        except BaseException:  # noqa: BLE001 - anything else is the bug being looked for
+            crash = traceback.format_exc()
+        took = time.perf_counter() - started
+        out, err = self.capsys.readouterr()
+        self.count += 1
+        self.seconds += took
+        self.slowest = sorted([*self.slowest, (took, argv)], reverse=True)[:5]
+        result = Result(argv, code, crash, out, err)
+        result.check(call, before, snapshot(work))
+        self.successes += code == 0
+        shutil.rmtree(work, ignore_errors=True)
+        if any(self.root.glob(f"{STAGING_PREFIX}*")):
+            result.fail("left a staging folder outside its working folder")
+
+    def summary(self, path: tuple[str, ...]) -> str:
+        slowest = "; ".join(f"{t:.2f} s {a[:8]}" for t, a in self.slowest[:3])
+        return (
+            f"fuzz {' '.join(path) or 'swarmtag'}: {self.count} invocations "
+            f"({self.successes} succeeded) in {self.seconds:.1f} s, seed {SEED}; "
+            f"slowest: {slowest}"
+        )
+
+
+@dataclass
+class Result:
+    """What one invocation did: exit status (None if it returned), traceback, output."""
+
+    argv: list[str]
+    code: object
+    crash: str
+    out: str
+    err: str
+
+    def fail(self, what: str) -> None:
+        pytest.fail(
+            f"{what}\n  argv: {self.argv!r}\n  seed: SWARMTAG_FUZZ_SEED={SEED}\n"
+            f"  stdout: {self.out[-2000:]!r}\n  stderr: {(self.crash + self.err)[-5000:]!r}",
+            pytrace=False,
+        )
+
+    def check(self, call: Invocation, before: Snapshot, after: Snapshot) -> None:
+        """The contract of one invocation (see the module docstring)."""
+        if self.crash:
+            self.fail("raised instead of exiting")
+        if self.code not in (0, 2):
+            self.fail(f"exit status {self.code!r}, not 0 or 2")
+        if "Traceback" in self.out or "Traceback" in self.err:
+            self.fail("printed a traceback")
+        gone = sorted(set(before) - set(after))
+        if gone:
+            self.fail(f"removed {gone}")
+        left = [p for p in after if Path(p).name.startswith(STAGING_PREFIX) or p.endswith(".tmp")]
+        if left:
+            self.fail(f"left {left}")
+        changed = sorted(p for p in after if before.get(p) != after[p])
+        helped = self.code == 0 and self.out.startswith("Usage:")
+        if self.code == 2 or helped:
+            if changed:
+                self.fail(f"{'printed help' if helped else 'failed'} but wrote {changed}")
+            if self.code == 2:
+                self.check_refusal()
+            return
+        if "swarmtag: error:" in self.err:
+            self.fail("succeeded but printed an error")
+        stray = [p for p in changed if not allowed(p, call.outputs)]
+        if stray:
+            self.fail(f"wrote {stray}, which no option names")
+        inputs = INPUTS.get(call.path, ())
+        read = {local(v) for k, vs in call.given.items() if k in inputs for v in vs}
+        overwritten = sorted(read.intersection(changed))
+        if overwritten:
+            self.fail(f"changed {overwritten}, which it reads")
+        missing = not_written(call.outputs)
+        if missing:
+            self.fail(f"succeeded without writing {missing}")
+
+    def check_refusal(self) -> None:
+        lines = self.err.split("\n")
+        if len(lines) != 2 or lines[1] or not self.err.startswith("swarmtag: error: "):
+            self.fail("refused, but not in exactly one 'swarmtag: error:' line")
+        if "Usage:" in self.out:  # a command may have said what it started before it failed
+            self.fail("refused, but printed help on stdout")
+
+
+# --- the tests ----------------------------------------------------------------------------------
+
+
+def fuzz(path: tuple[str, ...], strategy: st.SearchStrategy[Invocation], fuzzer: Fuzzer) -> None:
+    @seed(SEED)
+    @settings(
+        max_examples=examples(path),
+        deadline=None,
+        database=None,
+        suppress_health_check=list(HealthCheck),
+        phases=[Phase.explicit, Phase.generate],  # shrinking CLI calls takes minutes
+        print_blob=False,
+    )
+    @given(strategy)
+    def one(call: Invocation) -> None:
+        fuzzer.run(call)
+
+    one()
+    assert fuzzer.count >= 1, f"{' '.join(path) or 'swarmtag'}: no invocation was generated"
+    print(fuzzer.summary(path))  # shown by -rP
+
+
+@pytest.fixture
+def fuzzer(tmp_path, templates, capsys, monkeypatch) -> Fuzzer:
+    return Fuzzer(tmp_path, templates, capsys, monkeypatch)
+
+
+def test_every_command_and_option_is_fuzzed():
+    assert set(COMMANDS) == set(NORMAL_EXAMPLES) - {()}
+    for path, command in COMMANDS.items():
+        for param in command.params:
+            if not (isinstance(param, click.Option) and param.is_flag):
+                values(path, param)  # raises for an option the fuzzer has no values for
+        names = {p.name for p in command.params}
+        assert set(OUTPUTS.get(path, {})) | set(INPUTS.get(path, ())) <= names, path
+
+
+@pytest.mark.parametrize("path", sorted(COMMANDS), ids=" ".join)
+def test_fuzz_command(path, fuzzer):
+    fuzz(path, invocations(path), fuzzer)
+
+
+ROOT_WORDS = ("--help", "-h", "--version", "tag", "study", "nope", "", "-", "--", "Simulate")
+LEAVES = {path[-1] for path in COMMANDS}
+
+
+@st.composite
+def root_invocations(draw: st.DrawFn) -> Invocation:
+    """Group-level words: help, version, groups without a command, unknown commands.
+
+    A command named here is always followed by a word it refuses (or --help):
+    its own options are the other tests' business.
+    """
+    first = draw(st.lists(st.sampled_from([*ROOT_WORDS, *sorted(LEAVES)]), max_size=3))
+    extra = st.one_of(st.sampled_from([w for w in JUNK if w != "--"]), junk)
+    rest = draw(st.lists(extra.filter(lambda w: w not in ("", "--")), max_size=2))
+    if LEAVES & set(first) and not rest:
+        rest = ["--help"]
+    return Invocation([*first, *rest])
+
+
+def test_fuzz_root(fuzzer):
+    fuzz((), root_invocations(), fuzzer)
