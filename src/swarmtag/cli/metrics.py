@@ -8,6 +8,7 @@ import tempfile
 from collections.abc import Sequence
 from contextlib import nullcontext
 from pathlib import Path
+from typing import overload
 
 import click
 from rich.console import Console, JustifyMethod
@@ -49,9 +50,9 @@ from swarmtag.analysis.tables import (
 )
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
-from swarmtag.io import CarrierLog, read_event_log, read_event_table
+from swarmtag.io import CarrierLog, EventTable, read_event_log, read_event_table
 
-__all__ = ["metrics", "render_choices", "render_report"]
+__all__ = ["metrics", "render_choices", "render_report", "summarize_with_choices"]
 
 
 def _time_note(time_unit: str | None) -> str:
@@ -136,6 +137,36 @@ def render_report(report: MetricsReport, console: Console) -> None:
         "Mann-Whitney U two-sided on per-run values (KM P95 has none).",
         highlight=False,
     )
+
+
+@overload
+def summarize_with_choices(
+    log: CarrierLog, table: EventTable, *, baseline: str | None, resamples: int, seed: int
+) -> tuple[MetricsReport, tuple[ConditionChoices, ...]]: ...
+@overload
+def summarize_with_choices(
+    log: CarrierLog, table: EventTable | None, *, baseline: str | None, resamples: int, seed: int
+) -> tuple[MetricsReport, tuple[ConditionChoices, ...] | None]: ...
+def summarize_with_choices(
+    log: CarrierLog,
+    table: EventTable | None,
+    *,
+    baseline: str | None,
+    resamples: int,
+    seed: int,
+) -> tuple[MetricsReport, tuple[ConditionChoices, ...] | None]:
+    """The KPI report of ``log`` and, given its event table, the choice statistics too."""
+    report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
+    if table is None:
+        return report, None
+    choices = choice_statistics(
+        table,
+        log=log,
+        conditions=[c.condition for c in report.conditions],
+        n_resamples=resamples,
+        seed=seed,
+    )
+    return report, choices
 
 
 def render_choices(choices: Sequence[ConditionChoices], console: Console) -> None:
@@ -297,16 +328,9 @@ def metrics(
         f"bootstrapping {resamples} resamples of {len(log.conditions)} condition(s)"
     )
     with plan.writing() as stage, status if sys.stderr.isatty() else nullcontext():
-        report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
-        choices = None
-        if table is not None:
-            choices = choice_statistics(
-                table,
-                log=log,
-                conditions=[c.condition for c in report.conditions],
-                n_resamples=resamples,
-                seed=seed,
-            )
+        report, choices = summarize_with_choices(
+            log, table, baseline=baseline, resamples=resamples, seed=seed
+        )
         written = _write_outputs(
             stage,
             report,

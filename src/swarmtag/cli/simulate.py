@@ -15,11 +15,10 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from swarmtag._checks import MAX_RUN_INDEX, MAX_SEED
 from swarmtag._outputs import OutputPlan, Stage
 from swarmtag._resources import check_memory
-from swarmtag.analysis import choice_statistics, summarize
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
 from swarmtag.cli._scenario import build_scenario, scenario_options
-from swarmtag.cli.metrics import render_choices, render_report
+from swarmtag.cli.metrics import render_choices, render_report, summarize_with_choices
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 from swarmtag.policy import Policy, Proximity, Urgency, Weighted, parse_policy
@@ -296,13 +295,8 @@ def simulate_cmd(
         log, table = run_conditions(
             scenario, policies, seed=seed, runs=runs, run_offset=run_offset, progress=show
         )
-        report = summarize(log, baseline=baseline, n_resamples=resamples, seed=seed)
-        choices = choice_statistics(
-            table,
-            log=log,
-            conditions=[c.condition for c in report.conditions],
-            n_resamples=resamples,
-            seed=seed,
+        report, choices = summarize_with_choices(
+            log, table, baseline=baseline, resamples=resamples, seed=seed
         )
         notes = []
         if events is not None:
