@@ -62,20 +62,22 @@ from swarmtag.cli import main
 from swarmtag.cli._main import app
 from swarmtag.data import example_trial_path
 from swarmtag.sim.profiles import profile_path
+from tests.cli.fuzz_files import (
+    TINY_SCENARIO,
+    TINY_STUDY,
+    TINY_TARGETS,
+    Made,
+    Token,
+    make,
+)
 from tests.cli.fuzz_values import (
     CHEAP,
     INPUTS,
     OUTPUTS,
     SHIPPED_STUDIES,
-    TINY_SCENARIO,
-    TINY_STUDY,
-    TINY_TARGETS,
     UNGUARDED_BASELINES,
-    Made,
-    Token,
     Values,
     junk,
-    make,
     values,
 )
 

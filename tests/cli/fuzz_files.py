@@ -1,0 +1,189 @@
+"""The files the CLI fuzzer gives commands: what to make in a working folder, and how to damage it.
+
+Used by ``tests/cli/fuzz_values.py`` and ``tests/cli/test_fuzz.py``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from hypothesis import strategies as st
+
+# --- files an invocation may need ------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Made:
+    """A file-system object an invocation needs, made in its working folder before the call.
+
+    ``kind``: ``copy`` (a template), ``edit`` (a template changed by ``op``),
+    ``bytes`` (``data``), ``dir``, ``fifo``, ``tree`` (a template folder) or
+    ``parent`` (only the folder above ``name``).
+    """
+
+    name: str
+    kind: str
+    template: str = ""
+    op: tuple[Any, ...] = ()
+    data: bytes = b""
+
+
+Token = str | Made
+"""One word of an invocation: literal text, or a path made first."""
+
+TINY_STUDY = """\
+ticks = 20
+name = "tiny"
+conditions = ["proximity", "urgency:alpha=0.7"]
+runs = 2
+quick_runs = 1
+chunk_runs = 2
+resamples = 20
+profile = "base"
+
+[scenario]
+robots = 2
+carriers = 3
+"""
+TINY_TARGETS = """\
+[calibration]
+name = "tiny"
+description = "tiny"
+condition = "proximity"
+seed = 0
+free = ["timing.dock=0.5:8:log"]
+evaluations = 2
+
+[[setups]]
+name = "t"
+runs = 1
+scenario = { robots = 2, carriers = 3, ticks = 20 }
+
+[setups.kpis]
+deliveries_per_run = { value = 1, ci = [0.5, 1.5] }
+pa = { value = 0.5, ci = [0.2, 0.8], weight = 0 }
+"""
+TINY_SCENARIO = "robots = 2\ncarriers = 3\nticks = 20\n\n[camera]\nmemory = 2.0\n"
+
+
+NUMBER = re.compile(rb"-?\d+(?:\.\d+)?(?:e[+-]?\d+)?")
+
+
+def edit(data: bytes, op: tuple[Any, ...]) -> bytes:  # noqa: PLR0911 - one return per edit
+    """``data`` changed by ``op`` (see ``corruptions``)."""
+    name, *args = op
+    if name == "truncate":
+        return data[: int(len(data) * args[0])]
+    if name == "insert":
+        at = int(len(data) * args[0])
+        return data[:at] + args[1] + data[at:]
+    if name == "flip":
+        at = min(len(data) - 1, int(len(data) * args[0]))
+        return data[:at] + bytes([args[1]]) + data[at + 1 :]
+    if name == "random":
+        return args[0]
+    if name == "number":
+        matches = list(NUMBER.finditer(data)) or [re.search(rb"$", data)]
+        match = matches[args[0] % len(matches)]
+        assert match is not None
+        return data[: match.start()] + args[1] + data[match.end() :]
+    lines = data.split(b"\n")
+    at = args[0] % len(lines)
+    if name == "rows":
+        return b"\n".join(lines[: 1 + args[0]]) + b"\n"
+    if name == "drop":
+        return b"\n".join(lines[:at] + lines[at + 1 :])
+    if name == "repeat":
+        return b"\n".join([*lines[: at + 1], lines[at], *lines[at + 1 :]])
+    assert name == "line", op
+    return b"\n".join([*lines[:at], args[1], *lines[at + 1 :]])
+
+
+def make(token: Made, work: Path, templates: dict[str, Path]) -> None:
+    """Create ``token`` in ``work`` (once: a second token of the same name finds it made)."""
+    target = work / token.name
+    if token.kind == "parent":
+        target.parent.mkdir(parents=True, exist_ok=True)
+        return
+    if target.exists() or target.is_symlink():
+        return
+    target.parent.mkdir(parents=True, exist_ok=True)
+    if token.kind == "dir":
+        target.mkdir()
+    elif token.kind == "fifo":
+        os.mkfifo(target)
+    elif token.kind == "tree":
+        shutil.copytree(templates[token.template], target)
+    elif token.kind == "copy":
+        shutil.copyfile(templates[token.template], target)
+    elif token.kind == "edit":
+        target.write_bytes(edit(templates[token.template].read_bytes(), token.op))
+    else:
+        target.write_bytes(token.data)
+
+
+# --- damaged and missing inputs -----------------------------------------------------------
+
+
+HUGE = (
+    b"1e308", b"1e309", b"-1e309", b"nan", b"inf", b"-inf", b"-0.0", b"1" + b"0" * 30,
+    b"9" * 400, b"1e-400", b"0x10", b"", b"\xff", b"-1", b"true", b'"x"', b"[]",
+)  # fmt: skip
+"""Replacements for one number of an input file."""
+LINES = (b"", b",,,,,,,,,,,", b"\xc3\xa9", b"\0\0", b"x = ", b"[", b"proximity,0", b"\r")
+"""Replacements for one line of an input file."""
+
+
+def corruptions(*, text: bool = True, lines: bool = True) -> st.SearchStrategy[tuple[Any, ...]]:
+    """Ways to break a file: truncate, insert NUL, flip a byte, random bytes; for text also
+    a huge number for one number, and (``lines``) only the first rows, a line dropped,
+    repeated or replaced. Study and target files get no line edits: without its ``ticks``
+    line a study or set-up would simulate the default 3,000 ticks.
+    """
+    fraction = st.floats(0.0, 1.0)
+    ops = [
+        st.tuples(st.just("truncate"), fraction),
+        st.tuples(st.just("insert"), fraction, st.sampled_from([b"\0", b"\xff\xfe", b"\n"])),
+        st.tuples(st.just("flip"), fraction, st.integers(0, 255)),
+        st.tuples(st.just("random"), st.binary(max_size=200)),
+    ]
+    index = st.integers(0, 400)
+    if text:
+        ops.append(st.tuples(st.just("number"), index, st.sampled_from(HUGE)))
+    if text and lines:
+        ops += [
+            st.tuples(st.just("rows"), st.integers(0, 6)),
+            st.tuples(st.just("drop"), index),
+            st.tuples(st.just("repeat"), index),
+            st.tuples(st.just("line"), index, st.sampled_from(LINES)),
+        ]
+    return st.one_of(*ops)
+
+
+def edited(
+    template: str, suffix: str, *, text: bool = True, lines: bool = True
+) -> st.SearchStrategy[Token]:
+    return st.builds(
+        lambda n, op: Made(f"bad{n}{suffix}", "edit", template=template, op=op),
+        st.integers(0, 3),
+        corruptions(text=text, lines=lines),
+    )
+
+
+def copy(template: str) -> st.SearchStrategy[Token]:
+    return st.just(Made(template, "copy", template=template))
+
+
+def not_a_file(suffix: str) -> st.SearchStrategy[Token]:
+    """Inputs that are no file: missing, a folder, a FIFO, a name too long for a path."""
+    return st.one_of(
+        st.sampled_from([f"missing{suffix}", f"missing/x{suffix}", "", "x" * 300]),
+        st.just(Made(f"folder{suffix}", "dir")),
+        st.just(Made(f"fifo{suffix}", "fifo")),
+        st.just(Made("exists.txt", "bytes", data=b"old\n")),
+    )
