@@ -264,20 +264,32 @@ def too_large(spec: ColumnSpec, shown_value: str) -> str:
     return f"{shown_value} is too large; expected {spec.int_range()}"
 
 
-def finish_int(
-    spec: ColumnSpec, values: NDArray[np.int64], present: NDArray[np.bool_], loc: RowLocator
-) -> NDArray[np.int64]:
-    """Check the range of the present integers; fill missing cells with ``MISSING_ID``."""
+def _check_filled(spec: ColumnSpec, present: NDArray[np.bool_], loc: RowLocator) -> None:
+    """Refuse the first empty cell of a column that may not be empty."""
     if not spec.nullable:
         bad = _first(~present)
         if bad is not None:
             raise _empty_error(spec, bad, loc)
-    out_of_range = np.zeros(values.shape, dtype=bool)
+
+
+def _outside(
+    spec: ColumnSpec, values: NDArray[np.int64] | NDArray[np.float64]
+) -> NDArray[np.bool_]:
+    """Where ``values`` lie outside the column's range (NaN compares False: inside)."""
+    outside = np.zeros(values.shape, dtype=bool)
     if spec.minimum is not None:
-        out_of_range |= values < spec.minimum
+        outside |= values < spec.minimum
     if spec.maximum is not None:
-        out_of_range |= values > spec.maximum
-    bad = _first(out_of_range & present)
+        outside |= values > spec.maximum
+    return outside
+
+
+def finish_int(
+    spec: ColumnSpec, values: NDArray[np.int64], present: NDArray[np.bool_], loc: RowLocator
+) -> NDArray[np.int64]:
+    """Check the range of the present integers; fill missing cells with ``MISSING_ID``."""
+    _check_filled(spec, present, loc)
+    bad = _first(_outside(spec, values) & present)
     if bad is not None:
         raise loc.error(bad, spec.name, f"{int(values[bad])} is not {spec.expected()}")
     return np.where(present, values, MISSING_ID).astype(np.int64)
@@ -290,19 +302,11 @@ def finish_float(
 
     A time column's nonzero values must also be at least ``MIN_NONZERO_TIME`` in size.
     """
-    if not spec.nullable:
-        bad = _first(~present)
-        if bad is not None:
-            raise _empty_error(spec, bad, loc)
+    _check_filled(spec, present, loc)
     bad = _first(present & ~np.isfinite(values))
     if bad is not None:
         raise loc.error(bad, spec.name, f"{float(values[bad])!r} is not a finite number")
-    outside = np.zeros(values.shape, dtype=bool)
-    if spec.minimum is not None:
-        outside |= values < spec.minimum
-    if spec.maximum is not None:
-        outside |= values > spec.maximum
-    bad = _first(present & outside)
+    bad = _first(present & _outside(spec, values))
     if bad is not None:
         raise loc.error(
             bad, spec.name, f"{float(values[bad])!r} is out of range; expected {spec.expected()}"

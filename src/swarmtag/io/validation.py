@@ -35,7 +35,7 @@ import csv
 import math
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Final
@@ -178,15 +178,34 @@ def _first_mismatch(pattern: re.Pattern[str], texts: list[str]) -> int | None:
     return next(i for i, text in enumerate(texts) if not pattern.fullmatch(text))
 
 
+def _plain_cells(
+    spec: ColumnSpec,
+    cells: NDArray[np.str_],
+    present: NDArray[np.bool_],
+    loc: RowLocator,
+    *,
+    pattern: re.Pattern[str],
+    why: Callable[[str], str],
+) -> tuple[NDArray[np.intp], list[str]]:
+    """The rows and texts of the present cells; the first not matching ``pattern`` is refused.
+
+    ``why(text)`` says what is wrong with that cell.
+    """
+    rows = np.flatnonzero(present)
+    texts: list[str] = cells[present].tolist()
+    bad = _first_mismatch(pattern, texts)
+    if bad is not None:
+        raise loc.error(int(rows[bad]), spec.name, why(texts[bad]))
+    return rows, texts
+
+
 def parse_int_cells(
     spec: ColumnSpec, cells: NDArray[np.str_], present: NDArray[np.bool_], loc: RowLocator
 ) -> NDArray[np.int64]:
     """The integers of a CSV column (see the module docstring for the accepted forms)."""
-    rows = np.flatnonzero(present)
-    texts: list[str] = cells[present].tolist()
-    bad = _first_mismatch(INT_CELL, texts)
-    if bad is not None:
-        raise loc.error(int(rows[bad]), spec.name, f"{shown(texts[bad])} is not an integer")
+    rows, texts = _plain_cells(
+        spec, cells, present, loc, pattern=INT_CELL, why=lambda t: f"{shown(t)} is not an integer"
+    )
     given = cells[present]
     heads = texts
     if any("." in text for text in texts):  # "3.0": keep the part before the point
@@ -222,11 +241,7 @@ def parse_float_cells(
     spec: ColumnSpec, cells: NDArray[np.str_], present: NDArray[np.bool_], loc: RowLocator
 ) -> NDArray[np.float64]:
     """The numbers of a CSV column (see the module docstring for the accepted forms)."""
-    rows = np.flatnonzero(present)
-    texts: list[str] = cells[present].tolist()
-    bad = _first_mismatch(FLOAT_CELL, texts)
-    if bad is not None:
-        raise loc.error(int(rows[bad]), spec.name, _not_a_number(texts[bad]))
+    _, texts = _plain_cells(spec, cells, present, loc, pattern=FLOAT_CELL, why=_not_a_number)
     values = np.full(cells.shape, np.nan)
     values[present] = np.array(texts, dtype=str).astype(np.float64)
     overflow = np.flatnonzero(present & ~np.isfinite(values))  # a plain number like 1e400
