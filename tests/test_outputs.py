@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import os
+import shutil
 import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -149,3 +152,43 @@ def test_sigint_during_the_final_moves_is_held_until_all_are_in_place(tmp_path, 
         write_then(plan, targets, None)
     monkeypatch.undo()
     assert names(tmp_path) == sorted(f"{i}.txt" for i in range(20))
+
+
+def test_sigint_while_the_staging_folder_is_removed_still_removes_it(tmp_path, monkeypatch):
+    plan = OutputPlan()
+    target = plan.file("--out", tmp_path / "a.txt")
+    original = shutil.rmtree
+
+    def interrupt_then_remove(path: Path, *, ignore_errors: bool) -> None:
+        os.kill(os.getpid(), signal.SIGINT)  # held back until every staging folder is gone
+        original(path, ignore_errors=ignore_errors)
+
+    monkeypatch.setattr(shutil, "rmtree", interrupt_then_remove)
+    with pytest.raises(KeyboardInterrupt):
+        write_then(plan, [target], RuntimeError("the command failed"))
+    monkeypatch.undo()
+    assert names(tmp_path) == []
+
+
+def test_a_staging_folder_whose_removal_never_ran_goes_at_exit(tmp_path):
+    # A Ctrl-C as the ``with`` block ends, before the context manager's exit runs, leaves the
+    # generator suspended; here it is never finalized (a leaked reference), as when a traceback
+    # holds it: the process's exit removes its staging folder all the same.
+    script = (
+        "import ctypes, sys, pathlib\n"
+        "from swarmtag._outputs import OutputPlan\n"
+        "plan = OutputPlan()\n"
+        "target = plan.file('--out', pathlib.Path(sys.argv[1]) / 'a.txt')\n"
+        "writing = plan.writing()\n"
+        "stage = writing.__enter__()\n"
+        "ctypes.pythonapi.Py_IncRef(ctypes.py_object(writing))\n"
+        "stage.path(target).write_text('half')\n"
+        "print(len(list(pathlib.Path(sys.argv[1]).iterdir())))\n"
+        "raise KeyboardInterrupt\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script, str(tmp_path)], capture_output=True, text=True, check=False
+    )
+    assert done.stdout.strip() == "1", done.stderr  # the staging folder existed
+    assert "KeyboardInterrupt" in done.stderr
+    assert names(tmp_path) == []

@@ -11,7 +11,10 @@ Work writes each output under a hidden staging folder beside its target,
 with the target's own name (so formats chosen by suffix still work). Only
 when every output was written are they moved into place, with Ctrl-C held
 back for those few renames; any failure or Ctrl-C before that removes the
-staging folders and leaves the targets exactly as they were.
+staging folders and leaves the targets exactly as they were. Their removal
+holds Ctrl-C back too, and a staging folder that a Ctrl-C between two steps
+kept from its removal (one arriving as the ``with`` block ends, before the
+context manager runs) is removed when the process exits.
 
 >>> import tempfile, pathlib
 >>> folder = pathlib.Path(tempfile.mkdtemp())
@@ -25,6 +28,7 @@ staging folders and leaves the targets exactly as they were.
 
 from __future__ import annotations
 
+import atexit
 import os
 import secrets
 import shutil
@@ -41,6 +45,23 @@ __all__ = ["STAGING_PREFIX", "OutputPlan", "Stage"]
 
 STAGING_PREFIX = ".swarmtag-staging-"
 """Name prefix of the hidden staging folders (removed on failure; left only by SIGKILL)."""
+
+_unremoved: set[Path] = set()
+"""Staging folders made by this process and not yet removed (the exit's backstop)."""
+
+
+def _remove(roots: Sequence[Path]) -> None:
+    """Remove staging folders, with Ctrl-C held back until they are gone."""
+    with deferred():
+        for root in roots:
+            shutil.rmtree(root, ignore_errors=True)
+            _unremoved.discard(root)
+
+
+@atexit.register
+def _remove_unremoved() -> None:
+    """At exit, remove what an ill-timed Ctrl-C kept ``writing()`` from removing."""
+    _remove(sorted(_unremoved))
 
 
 def _key(path: Path) -> str:
@@ -152,6 +173,7 @@ class OutputPlan:
         """A new staging folder in ``folder``, noted in ``roots`` first (so Ctrl-C removes it)."""
         root = folder / f"{STAGING_PREFIX}{secrets.token_hex(6)}"
         roots[os.path.realpath(folder)] = root
+        _unremoved.add(root)
         try:
             root.mkdir()
         except OSError as problem:
@@ -184,8 +206,7 @@ class OutputPlan:
                 raise self._error(msg)
             _commit(moves)
         finally:
-            for root in roots.values():
-                shutil.rmtree(root, ignore_errors=True)
+            _remove([*roots.values()])
 
 
 def _commit(moves: Sequence[tuple[Path, Path, bool]]) -> None:
