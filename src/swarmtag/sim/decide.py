@@ -1,29 +1,28 @@
-"""Phase 2 of a tick, decide: breakdowns, pursuit checks, selection, walk directions.
+"""The built-in controller's ``decide`` step: pursuit checks, selection, walk directions.
 
-In this order, for every robot at once:
+In this order, for every robot at once (broken robots are the world's,
+``swarmtag.sim.world.break_down``):
 
-1. a robot whose breakdown number fires breaks down for good (a carrier it
-   holds stays PICKED_UP with it: stuck);
-2. a pursuing robot (PREDOCK, DOCK, CENTRE) abandons when the status it last
+1. a pursuing robot (PREDOCK, DOCK, CENTRE) abandons when the status it last
    heard from its target is not AWAITING_PICKUP, else times out when the
    pursuit has lasted ``timeout_ticks`` (that carrier is then barred to it
    for ``cooldown_ticks``); either way it returns to random walk;
-3. with ``avoid_taken_faces``, a robot in PREDOCK whose predock point it
+2. with ``avoid_taken_faces``, a robot in PREDOCK whose predock point it
    sees taken by another robot (nearer to the point, within a robot
    diameter of it) moves on to the nearest free face not taken, if any;
-4. a robot that was walking at the start of the tick selects, with the
+3. a robot that was walking at the start of the tick selects, with the
    policy's ``select``, among its candidates: carriers whose position it
    knows from the camera, last heard as AWAITING_PICKUP, not cooling down
    for it and with a free predock face; it will dock at the free face whose
    predock point is nearest to it (with ``avoid_taken_faces``: the nearest
    not taken, if there is one). Each selection also records how many
    candidates there were (the ``candidates`` event);
-5. a walking robot that touched something last tick, or has just returned
+4. a walking robot that touched something last tick, or has just returned
    to walking, takes this tick's random direction, reversed if it points
    into what it touched (negative dot product with the contact push); with
    a turning walk, any other walking robot whose heading has been kept for
    ``walk_turn_ticks`` rotates it by this tick's turn;
-6. a loaded robot stuck for ``stuck_ticks`` starts a sidestep of
+5. a loaded robot stuck for ``stuck_ticks`` starts a sidestep of
    ``sidestep_ticks`` along this tick's sidestep direction (reversed alike).
 """
 
@@ -33,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.policy import select
-from swarmtag.sim._index import PURSUIT_MODES, at_robots, grid, in_modes, is_loaded, own, to_walk
+from swarmtag.sim._index import PURSUIT_MODES, at_robots, grid, in_modes, own, to_walk
 from swarmtag.sim.events import EventKind, TickEvents
 from swarmtag.sim.geometry import Float
 from swarmtag.sim.params import Params
@@ -56,20 +55,6 @@ def away_from(direction: Float, push: Float) -> Float:
     """
     dot = direction[..., 0] * push[..., 0] + direction[..., 1] * push[..., 1]
     return np.where((dot < 0)[..., None], -direction, direction)
-
-
-def _breakdowns(s: WorldState, inputs: TickInputs, events: TickEvents) -> None:
-    broken = inputs.breakdown & (s.mode != Mode.BROKEN)
-    if not broken.any():
-        return
-    loaded = is_loaded(s.mode, s.target)
-    events.add(
-        EventKind.BREAKDOWN, broken, np.where(loaded, s.target, -1), np.full(broken.shape, np.nan)
-    )
-    s.target[broken & ~loaded] = -1
-    s.face[broken] = -1
-    s.timer[broken] = 0
-    s.mode[broken] = Mode.BROKEN
 
 
 def _pursuit_checks(s: WorldState, params: Params, t: int, events: TickEvents) -> None:
@@ -191,7 +176,6 @@ def decide(
     events: TickEvents,
 ) -> None:
     """Apply the decisions of tick ``t`` to ``s`` in place (``before``: the state at tick start)."""
-    _breakdowns(s, inputs, events)
     _pursuit_checks(s, params, t, events)
     _switch_taken_faces(s, params)
     walkers = (before.mode == Mode.WALK) & (s.mode == Mode.WALK)

@@ -21,12 +21,12 @@ from numpy.typing import NDArray
 
 from swarmtag.errors import InvariantError
 from swarmtag.sim._index import is_loaded
-from swarmtag.sim.docking import ROBOT_WRITE_ALLOWED
 from swarmtag.sim.events import TickEvents
 from swarmtag.sim.geometry import contact_push
 from swarmtag.sim.motion import body_shape
 from swarmtag.sim.params import Params
 from swarmtag.sim.state import WorldState
+from swarmtag.sim.world import ROBOT_WRITE_ALLOWED
 
 __all__ = ["OVERLAP_TOLERANCE", "check_tick"]
 

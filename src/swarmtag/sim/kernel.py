@@ -1,10 +1,13 @@
 """The step kernel: one tick of a batch of runs, a pure function of (state, inputs, params).
 
-``step`` runs the phases of SPEC §4.5 in order: sense (``sense``) -> decide
-(``decide``) -> move and resolve collisions (``motion``) -> dock / lift /
-release (``docking``) -> end of tick (tags' urgency growth, the advertised
-state history, run ends). It returns the next state and the tick's events;
-the state it is given is left untouched. Operator writes (re-prioritisations)
+``step`` runs the phases of SPEC §4.5 in order, the world's and the
+controller's (``swarmtag.sim.control``) in turn: sense (``sense``) ->
+breakdowns (``world``) -> the controller decides -> move and resolve
+collisions (``motion``) -> the controller arrives -> docking and the tags'
+answers to lift writes (``world``) -> the controller carries -> deliveries
+(``world``) -> end of tick (tags' urgency growth, the advertised state
+history, run ends). It returns the next state and the tick's events; the
+state it is given is left untouched. Operator writes (re-prioritisations)
 are applied by the caller after ``step`` (``swarmtag.sim.wms``), as the
 last thing in the tick.
 
@@ -19,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from swarmtag.sim.decide import decide
-from swarmtag.sim.docking import handle
+from swarmtag.sim.builtin import BUILTIN
+from swarmtag.sim.control import Controller
 from swarmtag.sim.events import TickEvents
 from swarmtag.sim.motion import move, resolve
 from swarmtag.sim.params import Params
@@ -28,6 +31,7 @@ from swarmtag.sim.randomness import TickInputs
 from swarmtag.sim.sense import sense
 from swarmtag.sim.state import WorldState
 from swarmtag.sim.urgency import growing_urgency
+from swarmtag.sim.world import answer_lifts, break_down, deliver, dock
 
 __all__ = ["step"]
 
@@ -57,8 +61,13 @@ def _freeze(before: WorldState, after: WorldState, frozen: np.ndarray) -> WorldS
     return replace(after, **changes)
 
 
-def step(state: WorldState, inputs: TickInputs, params: Params) -> tuple[WorldState, TickEvents]:
-    """The state after one more tick, and what happened in it."""
+def step(
+    state: WorldState,
+    inputs: TickInputs,
+    params: Params,
+    controller: Controller = BUILTIN,
+) -> tuple[WorldState, TickEvents]:
+    """The state after one more tick, and what happened in it (``controller`` decides)."""
     t = state.tick + 1
     senses = sense(state, inputs, params)
     s = replace(
@@ -70,10 +79,14 @@ def step(state: WorldState, inputs: TickInputs, params: Params) -> tuple[WorldSt
         seen_pos=senses.seen_pos,
     )
     events = TickEvents()
-    decide(state, s, senses=senses, inputs=inputs, params=params, t=t, events=events)
-    proposed = move(s, params)
-    resolve(s, state.robot_pos, proposed, params)
-    handle(s, params, t, events)
+    break_down(s, inputs, events)
+    controller.decide(state, s, senses=senses, inputs=inputs, params=params, t=t, events=events)
+    resolve(s, move(s, params), params)
+    arrivals = controller.arrive(state, s, params=params, t=t)
+    dock(s, arrivals)
+    answers = answer_lifts(s, arrivals.lift, t, events)
+    carrying = controller.carry(s, answers, params=params, t=t)
+    deliver(s, carrying, answers=answers, params=params, t=t, events=events)
     _end_of_tick(s, params, t)
     ended = state.ended_at >= 0
     if ended.any():

@@ -43,9 +43,6 @@ from swarmtag.sim.state import Int, Mode, WorldState
 
 __all__ = ["body_shape", "move", "resolve"]
 
-_STUCK_PROGRESS = 0.25
-"""A loaded robot that moved less than this fraction of its step counts a stuck tick."""
-
 
 def body_shape(
     mode: NDArray[np.int8], target: NDArray[np.int64], params: Params
@@ -198,12 +195,11 @@ def _collision_pass(x: Float, y: Float, b: _Bodies) -> tuple[Float, Float, bool]
     return new_x, new_y, bool(runs.size or runs_c.size)
 
 
-def resolve(s: WorldState, start: Float, proposed: Float, params: Params) -> None:
+def resolve(s: WorldState, proposed: Float, params: Params) -> None:
     """Resolve collisions of the ``proposed`` positions and write the outcome into ``s``.
 
-    Sets positions, the contact push, the stuck count of loaded robots, the
-    positions of carried carriers, and forgets the carrier a robot was under
-    once it is clear of it. ``start`` holds the positions before the move.
+    Sets positions, the contact push, the positions of carried carriers, and
+    forgets the carrier a robot was under once it is clear of it.
     A pass in which no pair is close enough to touch and the walls move
     nobody changes nothing, so the remaining passes are skipped.
     """
@@ -222,10 +218,6 @@ def resolve(s: WorldState, start: Float, proposed: Float, params: Params) -> Non
     loaded = is_loaded(s.mode, s.target)
     rows, holders = np.nonzero(loaded)
     s.carrier_pos[rows, s.target[rows, holders]] = position[rows, holders]
-
-    transporting = (s.mode == Mode.TRANSPORT) & (s.sidestep == 0)
-    slow = length(position - start) < _STUCK_PROGRESS * s.speed
-    s.stuck[:] = np.where(transporting & slow, s.stuck + 1, 0)
 
     under = s.ghost >= 0
     if under.any():

@@ -1,0 +1,138 @@
+"""The world's side of a tick around the controller: breakdowns, docking physics, the tags.
+
+- ``break_down`` (before the controller decides): a robot whose breakdown
+  number fires breaks down for good; a carrier it holds stays PICKED_UP
+  with it (stuck). The world takes the robot from its controller.
+- ``dock`` (after ``arrive``): a robot that drives in may overlap its
+  carrier; a robot that starts centring stands on the carrier's centre.
+- ``answer_lifts``: each tag answers the robots' lift writes: it accepts
+  AWAITING_PICKUP -> PICKED_UP only from AWAITING_PICKUP, from a robot
+  under it (``tag.ROBOT_TRANSITIONS`` as a table), and of several robots
+  writing to one carrier in the same tick the smallest id wins.
+- ``deliver`` (after ``carry``): a lifted robot no longer overlaps anything
+  but its load; a carrier set down in the drop-off area and written IDLE is
+  delivered and leaves the arena. Predock faces are recomputed in runs in
+  which a carrier was lifted (one obstacle fewer).
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag.errors import SimulationError
+from swarmtag.sim._index import at_robots, is_loaded
+from swarmtag.sim.control import Arrivals, Carrying, LiftAnswers
+from swarmtag.sim.events import EventKind, TickEvents
+from swarmtag.sim.params import Params
+from swarmtag.sim.predock import free_faces
+from swarmtag.sim.randomness import TickInputs
+from swarmtag.sim.state import Int, Mode, WorldState
+from swarmtag.tag import ROBOT_TRANSITIONS, TagStatus
+
+__all__ = ["ROBOT_WRITE_ALLOWED", "answer_lifts", "break_down", "deliver", "dock"]
+
+
+def _transition_table() -> NDArray[np.bool_]:
+    table = np.zeros((len(TagStatus), len(TagStatus)), dtype=bool)
+    for before, after in ROBOT_TRANSITIONS:
+        table[int(before), int(after)] = True
+    table.flags.writeable = False
+    return table
+
+
+ROBOT_WRITE_ALLOWED: Final = _transition_table()
+"""``[from, to]``: may a robot write this status change (``tag.ROBOT_TRANSITIONS`` as a table)."""
+
+
+def break_down(s: WorldState, inputs: TickInputs, events: TickEvents) -> None:
+    """Robots whose breakdown number fired this tick break down for good (in place)."""
+    broken = inputs.breakdown & (s.mode != Mode.BROKEN)
+    if not broken.any():
+        return
+    loaded = is_loaded(s.mode, s.target)
+    events.add(
+        EventKind.BREAKDOWN, broken, np.where(loaded, s.target, -1), np.full(broken.shape, np.nan)
+    )
+    s.target[broken & ~loaded] = -1
+    s.face[broken] = -1
+    s.timer[broken] = 0
+    s.mode[broken] = Mode.BROKEN
+
+
+def dock(s: WorldState, arrivals: Arrivals) -> None:
+    """Let robots that drive in overlap their carrier; put robots that centre on its centre."""
+    s.ghost[arrivals.drive_in] = s.target[arrivals.drive_in]
+    centre = at_robots(s.carrier_pos, s.target)
+    np.copyto(s.robot_pos, centre, where=arrivals.centred[..., None])
+
+
+def answer_lifts(s: WorldState, lift: Int, t: int, events: TickEvents) -> LiftAnswers:
+    """The tags' answers to the lift writes ``lift`` (R, N) (carrier, -1 none), applied in place."""
+    want = lift >= 0
+    if not want.any():
+        return LiftAnswers(accepted=want, refused=want.copy())
+    status = at_robots(s.status, lift).astype(np.int64)
+    claim = (
+        want
+        & ROBOT_WRITE_ALLOWED[status, int(TagStatus.PICKED_UP)]
+        & (at_robots(s.carried_by, lift) < 0)
+        & at_robots(s.present, lift)
+    )
+    robots = s.mode.shape[1]
+    index = np.arange(robots)
+    rival = (
+        claim[:, None, :]
+        & (lift[:, None, :] == lift[:, :, None])
+        & (index[None, :] < index[:, None])[None, :, :]
+    ).any(axis=-1)  # a smaller-id robot claims the same carrier
+    win = claim & ~rival
+    lose = want & ~win
+    events.add(EventKind.LIFT_REFUSED, lose, lift, status.astype(np.float64))
+    runs, holders = np.nonzero(win)
+    carriers = lift[runs, holders]
+    s.status[runs, carriers] = TagStatus.PICKED_UP
+    s.carried_by[runs, carriers] = holders
+    s.pickup_time[runs, carriers] = t
+    events.add(EventKind.LIFT, win, lift, at_robots(s.urgency, lift).astype(np.float64))
+    return LiftAnswers(accepted=win, refused=lose)
+
+
+def deliver(
+    s: WorldState,
+    carrying: Carrying,
+    *,
+    answers: LiftAnswers,
+    params: Params,
+    t: int,
+    events: TickEvents,
+) -> None:
+    """Apply the ``carry`` requests: drive-offs, set-downs and IDLE writes (in place)."""
+    s.ghost[carrying.raised] = -1
+    done = carrying.lower >= 0
+    if done.any():
+        status = at_robots(s.status, carrying.lower).astype(np.int64)
+        if not ROBOT_WRITE_ALLOWED[status[done], int(TagStatus.IDLE)].all():  # pragma: no cover
+            msg = f"tick {t}: a robot released a carrier whose tag is not PICKED_UP"
+            raise SimulationError(msg)
+        runs, robots = np.nonzero(done)
+        carriers = carrying.lower[runs, robots]
+        s.status[runs, carriers] = TagStatus.IDLE
+        s.present[runs, carriers] = False
+        s.carried_by[runs, carriers] = -1
+        s.delivery_time[runs, carriers] = t
+        s.deliverer[runs, carriers] = robots
+        s.delivery_urgency[runs, carriers] = s.urgency[runs, carriers]
+        events.add(
+            EventKind.DELIVER,
+            done,
+            carrying.lower,
+            at_robots(s.urgency, carrying.lower).astype(np.float64),
+        )
+    lifted = answers.accepted.any(axis=1)
+    if lifted.any():
+        rows = np.flatnonzero(lifted)
+        obstacle = s.present[rows] & (s.carried_by[rows] < 0)
+        s.free_face[rows] = free_faces(s.carrier_pos[rows], obstacle, params)
