@@ -29,6 +29,7 @@ what to do instead.
     ├── SimulationError (RuntimeError)      a simulation broke one of its own contracts
     │   ├── InvariantError                  a world-state invariant failed (checking mode)
     │   └── DeterminismError                a run differed between two ways of computing it
+    ├── ConformanceError                    a controller departed from the built-in one
     ├── StudyError (ValueError)             a study file or option is not allowed (names the key)
     ├── CalibrationError (ValueError)       a calibration baseline, free parameter or option refused
     ├── StoreError (RuntimeError)           the results store cannot be opened or is inconsistent
@@ -41,6 +42,7 @@ from __future__ import annotations
 __all__ = [
     "CalibrationError",
     "ConfigError",
+    "ConformanceError",
     "DeterminismError",
     "EventLogError",
     "FieldRangeError",
@@ -183,6 +185,10 @@ class InvariantError(SimulationError):
 
 class DeterminismError(SimulationError):
     """A run gave different results alone, in a batch or in another process."""
+
+
+class ConformanceError(SwarmtagError):
+    """A controller departed from the built-in controller; the message names the first place."""
 
 
 class StudyError(SwarmtagError, ValueError):

@@ -75,6 +75,7 @@ def step(
         tick=t,
         known_status=senses.known_status,
         known_urgency=senses.known_urgency,
+        heard_tick=senses.heard_tick,
         seen_tick=senses.seen_tick,
         seen_pos=senses.seen_pos,
     )

@@ -14,12 +14,14 @@ from typing import Final, Protocol
 
 import numpy as np
 
-from swarmtag._checks import MAX_RUN_INDEX, check_int
+from swarmtag._checks import MAX_RUN_INDEX, check_choice, check_int
 from swarmtag._interrupt import checkpoint
 from swarmtag._resources import check_memory
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable
 from swarmtag.policy import Policy
+from swarmtag.sim.builtin import BUILTIN
+from swarmtag.sim.control import Controller
 from swarmtag.sim.events import EventKind, EventRecorder
 from swarmtag.sim.invariants import check_tick
 from swarmtag.sim.kernel import step
@@ -33,6 +35,7 @@ from swarmtag.sim.wms import Operator
 from swarmtag.tag import TagStatus
 
 __all__ = [
+    "CONTROLLERS",
     "LOG_BYTES_PER_CARRIER",
     "InputSource",
     "SimResult",
@@ -116,11 +119,13 @@ def run_batch(
     ticks: int | None = None,
     record: bool = False,
     check: bool = False,
+    controller: Controller = BUILTIN,
 ) -> SimResult:
     """Step ``state`` until every run has ended, or for ``ticks`` ticks at most.
 
     ``seed`` is only written into the logs. ``check=True`` verifies the
     invariants of ``swarmtag.sim.invariants`` after every tick.
+    ``controller`` decides for the robots (``swarmtag.sim.control``).
     """
     limit = params.run_ticks - state.tick if ticks is None else check_int("ticks", ticks, low=0)
     operator = Operator(params.scenario.reprioritisations, state.runs)
@@ -132,7 +137,7 @@ def run_batch(
         if (state.ended_at >= 0).all():
             break
         t = state.tick + 1
-        after, tick_events = step(state, source.inputs(t), params)
+        after, tick_events = step(state, source.inputs(t), params, controller)
         after = operator.apply(after, events)
         if check:
             check_tick(state, after, tick_events, params)
@@ -167,6 +172,9 @@ def run_batch(
         trajectories=None if recorder is None else recorder.finish(params, seed=seed, last=state),
     )
 
+
+CONTROLLERS: Final = ("builtin", "bt")
+"""Controllers ``simulate`` can run: the vectorised built-in one, the behaviour trees."""
 
 LOG_BYTES_PER_CARRIER: Final = 2200
 """Memory per carrier and run of logs kept until written: the carrier row (~120 B), its ~8
@@ -213,12 +221,15 @@ def simulate(
     run_offset: int = 0,
     record: bool = False,
     check: bool = False,
+    controller: str = "builtin",
 ) -> SimResult:
     """Simulate runs ``run_offset ..`` of master ``seed`` under ``policy`` (SPEC §4).
 
     Run ``i`` is a pure function of (scenario, policy, seed, i): the same rows
     alone or in any batch. ``record=True`` keeps per-tick trajectories;
     ``check=True`` verifies the world invariants every tick (slower).
+    ``controller``: ``"builtin"`` (vectorised, the default) or ``"bt"`` (each
+    robot under its own behaviour tree, ``swarmtag.robot``; same event logs).
 
     >>> from swarmtag.policy import Urgency
     >>> result = simulate(Scenario(ticks=600), Urgency(alpha=0.7), seed=1, runs=2)
@@ -230,6 +241,7 @@ def simulate(
         msg = f"scenario: {checked!r} is not a Scenario"
         raise ConfigError(msg)
     runs = check_int("runs", runs, low=1, high=MAX_RUN_INDEX)
+    controller = check_choice("controller", controller, CONTROLLERS)
     check_memory(
         f"{runs} runs of {scenario.robots} robots and {scenario.carriers} carriers",
         batch_memory(scenario, runs, record=record),
@@ -238,4 +250,14 @@ def simulate(
     params = make_params(scenario, policy)
     state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset)
     source = RandomSource(params, seed=seed, run_ids=state.run_ids)
-    return run_batch(state, params, source, seed=seed, record=record, check=check)
+    if controller == "builtin":
+        return run_batch(state, params, source, seed=seed, record=record, check=check)
+    from swarmtag.robot.sil import TreeController  # noqa: PLC0415 - py_trees is an extra
+
+    trees = TreeController()
+    try:
+        return run_batch(
+            state, params, source, seed=seed, record=record, check=check, controller=trees
+        )
+    finally:
+        trees.close()

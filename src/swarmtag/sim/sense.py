@@ -52,6 +52,8 @@ class Senses:
     """Each robot's cache of tag statuses after this tick's advertisements (-1 never heard)."""
     known_urgency: NDArray[np.int8]
     """Each robot's cache of tag urgencies after this tick's advertisements."""
+    heard_tick: Int
+    """Tick in which each robot last heard each tag, this tick's included (-1 never)."""
     seen_tick: Int
     """Tick of each robot's last sighting of each carrier, this tick's included (-1 never)."""
     seen_pos: Float
@@ -138,6 +140,7 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     status, urgency = advertised(state, params)
     known_status = np.where(heard, status[:, None, :], state.known_status)
     known_urgency = np.where(heard, urgency[:, None, :], state.known_urgency)
+    heard_tick = np.where(heard, t, state.heard_tick)
     if params.split and params.memory_ticks == 0:
         visible = visible & actionable(state, known_status)
     if params.split and params.occlusion:
@@ -160,6 +163,7 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         distance=measured,
         known_status=known_status,
         known_urgency=known_urgency,
+        heard_tick=heard_tick,
         seen_tick=seen_tick,
         seen_pos=seen_pos,
     )

@@ -100,6 +100,8 @@ class WorldState:
     """(R, N, C) status last heard from each tag; -1 never heard."""
     known_urgency: NDArray[np.int8]
     """(R, N, C) urgency last heard from each tag (0 if never heard)."""
+    heard_tick: Int
+    """(R, N, C) tick in which the robot last heard each tag; -1 never (the cache's age)."""
     seen_tick: Int
     """(R, N, C) tick in which the robot's camera last saw each carrier; -1 never."""
     seen_pos: Float
@@ -332,6 +334,7 @@ def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -
         blocked_until=np.zeros((runs, n, c), dtype=np.int64),
         known_status=np.full((runs, n, c), -1, dtype=np.int8),
         known_urgency=np.zeros((runs, n, c), dtype=np.int8),
+        heard_tick=np.full((runs, n, c), -1, dtype=np.int64),
         seen_tick=np.full((runs, n, c), -1, dtype=np.int64),
         seen_pos=np.zeros((runs, n, c, 2)),
         walk_clock=robots(0),

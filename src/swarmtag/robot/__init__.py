@@ -1,0 +1,75 @@
+"""The robot's controller: the robot-I/O protocol, the behaviour tree, software-in-the-loop.
+
+- ``RobotIO`` and its data types: what a controller may read and do
+  (``swarmtag.robot.io``); the simulator offers one view per robot, a real
+  robot its drivers (docs/controller.md);
+- ``ControllerConfig``: the mission rules and site geometry;
+- ``create_tree`` and the subtree factories (py_trees, the ``robot``
+  extra): SPEC §3.2 as a behaviour tree;
+- ``TreeController``: every simulated robot under its own tree
+  (``simulate(..., controller="bt")``);
+- ``check_controller``: a conformance check against the built-in controller.
+
+The modules that need py_trees are imported on first use.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from swarmtag.robot.config import ControllerConfig
+from swarmtag.robot.io import (
+    Behaviour,
+    ControlStep,
+    Detections,
+    Pose,
+    RandomDraws,
+    Report,
+    RobotIO,
+    TagStates,
+)
+
+if TYPE_CHECKING:
+    from swarmtag.robot.conformance import Divergence, check_controller
+    from swarmtag.robot.sil import TreeController, TreeFactory
+    from swarmtag.robot.tree import ascii_picture, create_tree, dot_picture
+
+__all__ = [
+    "Behaviour",
+    "ControlStep",
+    "ControllerConfig",
+    "Detections",
+    "Divergence",
+    "Pose",
+    "RandomDraws",
+    "Report",
+    "RobotIO",
+    "TagStates",
+    "TreeController",
+    "TreeFactory",
+    "ascii_picture",
+    "check_controller",
+    "create_tree",
+    "dot_picture",
+]
+
+_LAZY = {
+    "Divergence": "swarmtag.robot.conformance",
+    "check_controller": "swarmtag.robot.conformance",
+    "TreeController": "swarmtag.robot.sil",
+    "TreeFactory": "swarmtag.robot.sil",
+    "ascii_picture": "swarmtag.robot.tree",
+    "create_tree": "swarmtag.robot.tree",
+    "dot_picture": "swarmtag.robot.tree",
+}
+
+
+def __getattr__(name: str) -> Any:  # noqa: ANN401 - a lazily imported attribute
+    """Import the py_trees parts on first use."""
+    module = _LAZY.get(name)
+    if module is None:
+        msg = f"module 'swarmtag.robot' has no attribute {name!r}"
+        raise AttributeError(msg)
+    import importlib  # noqa: PLC0415
+
+    return getattr(importlib.import_module(module), name)
