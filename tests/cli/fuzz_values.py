@@ -383,6 +383,7 @@ BY_COMMAND: dict[tuple[str, ...], dict[str, Values]] = {
     ("reproduce",): {
         "sources": Values(STUDY_SOURCE.good, STUDY_SOURCE.bad, rare=True),  # runs and reports
     },
+    ("robot", "tree"): {"folder": folder_output()},
     ("calibrate",): {
         "baseline": BASELINE,
         "out": with_inputs(file_output(".toml")),
@@ -430,5 +431,6 @@ OUTPUTS: dict[tuple[str, ...], dict[str, str]] = {
     ("study", "run"): {"out_dir": "folder"},
     ("study", "report"): {"out_dir": "folder"},
     ("reproduce",): {"out_dir": "folder"},
+    ("robot", "tree"): {"folder": "folder"},
 }
 """The outputs of each command, by parameter name: what a success must have written."""

@@ -95,8 +95,9 @@ NORMAL_EXAMPLES = {
     ("profiles",): 150,
     ("calibrate",): 250,
     ("demo",): 8,
+    ("robot", "tree"): 40,
 }
-"""Invocations per command in the normal suite (2,008 in all)."""
+"""Invocations per command in the normal suite (2,048 in all)."""
 TOTAL = int(os.environ.get("SWARMTAG_FUZZ_EXAMPLES", "0")) or sum(NORMAL_EXAMPLES.values())
 """Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``."""
 HANG_SECONDS = 60

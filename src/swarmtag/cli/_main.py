@@ -14,6 +14,7 @@ from swarmtag.cli.calibrate import calibrate_cmd
 from swarmtag.cli.demo import demo
 from swarmtag.cli.metrics import metrics
 from swarmtag.cli.profiles import profiles_cmd
+from swarmtag.cli.robot import robot
 from swarmtag.cli.simulate import simulate_cmd
 from swarmtag.cli.study import reproduce, study
 from swarmtag.cli.tag import tag
@@ -58,6 +59,7 @@ app.add_command(study)
 app.add_command(reproduce)
 app.add_command(profiles_cmd)
 app.add_command(calibrate_cmd)
+app.add_command(robot)
 
 
 def _one_line(text: str) -> str:

@@ -23,7 +23,7 @@ from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 from swarmtag.policy import Policy, Proximity, Urgency, Weighted, parse_policy
 from swarmtag.sim import Scenario, simulate
-from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER, batch_memory
+from swarmtag.sim.runner import CONTROLLERS, LOG_BYTES_PER_CARRIER, batch_memory
 
 __all__ = ["DEFAULT_CONDITIONS", "run_conditions", "simulate_cmd"]
 
@@ -109,6 +109,7 @@ def run_conditions(
     runs: int,
     run_offset: int = 0,
     progress: bool = False,
+    controller: str = "builtin",
 ) -> tuple[CarrierLog, EventTable]:
     """Simulate every condition in chunks of runs; the logs of all conditions, concatenated."""
     logs: list[CarrierLog] = []
@@ -127,7 +128,12 @@ def run_conditions(
             for start in range(0, runs, CHUNK_RUNS):
                 count = min(CHUNK_RUNS, runs - start)
                 result = simulate(
-                    scenario, policy, seed=seed, runs=count, run_offset=run_offset + start
+                    scenario,
+                    policy,
+                    seed=seed,
+                    runs=count,
+                    run_offset=run_offset + start,
+                    controller=controller,
                 )
                 logs.append(result.carriers)
                 tables.append(result.events)
@@ -145,6 +151,7 @@ def _draw(
     animation_path: Path | None,
     trajectories_path: Path | None,
     stage: Stage,
+    controller: str,
 ) -> list[str]:
     """Re-run ``run`` of each condition recording it; draw and save it; say what was written."""
     from swarmtag.sim.render import animate, snapshot  # noqa: PLC0415 - matplotlib is an extra
@@ -152,7 +159,15 @@ def _draw(
     written = []
     several = len(policies) > 1
     for policy in policies:
-        result = simulate(scenario, policy, seed=seed, runs=1, run_offset=run, record=True)
+        result = simulate(
+            scenario,
+            policy,
+            seed=seed,
+            runs=1,
+            run_offset=run,
+            record=True,
+            controller=controller,
+        )
         traj = result.trajectories
         assert traj is not None
         if snapshot_path is not None:
@@ -232,6 +247,14 @@ def _draw(
     type=click.IntRange(0, MAX_RUN_INDEX - 1),  # a run index: below 2**53, as --run-offset + i
     help="Run to draw or save with --snapshot/--animate/--trajectories [default: the first run].",
 )
+@click.option(
+    "--controller",
+    type=click.Choice(CONTROLLERS),
+    default="builtin",
+    show_default=True,
+    help="Who decides for the robots: the vectorised built-in controller, or a behaviour "
+    "tree per robot (bt; the robot extra). Both give the same event logs.",
+)
 @baseline_option
 @resamples_option
 @click.option("--json", "as_json", is_flag=True, help="Print the KPI JSON of SPEC §8.2.")
@@ -258,6 +281,7 @@ def simulate_cmd(
     animation: Path | None,
     trajectories_out: Path | None,
     draw_run: int | None,
+    controller: str,
     baseline: str | None,
     resamples: int,
     as_json: bool,
@@ -293,7 +317,13 @@ def simulate_cmd(
     show = sys.stderr.isatty() if progress is None else progress
     with plan.writing() as stage:
         log, table = run_conditions(
-            scenario, policies, seed=seed, runs=runs, run_offset=run_offset, progress=show
+            scenario,
+            policies,
+            seed=seed,
+            runs=runs,
+            run_offset=run_offset,
+            progress=show,
+            controller=controller,
         )
         report, choices = summarize_with_choices(
             log, table, baseline=baseline, resamples=resamples, seed=seed
@@ -315,6 +345,7 @@ def simulate_cmd(
                 animation_path=animation,
                 trajectories_path=trajectories_out,
                 stage=stage,
+                controller=controller,
             )
     if as_json:
         document = {**report.to_json(), "choices": [c.to_json() for c in choices]}
@@ -326,7 +357,9 @@ def simulate_cmd(
         f"{scenario.robots} robots, {scenario.carriers} carriers, "
         f"{scenario.run_ticks} ticks of {scenario.tick:g} s ({scenario.urgency.model} urgency), "
         f"{scenario.perception_summary()}, profile {profile}, {runs} runs "
-        f"from run {run_offset}, seed {seed}\n"
+        f"from run {run_offset}, seed {seed}"
+        + (", behaviour-tree controller" if controller == "bt" else "")
+        + "\n"
     )
     render_report(report, console)
     render_choices(choices, console)

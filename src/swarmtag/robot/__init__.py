@@ -15,7 +15,8 @@ The modules that need py_trees are imported on first use.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+import importlib
+from typing import TYPE_CHECKING
 
 from swarmtag.robot.config import ControllerConfig
 from swarmtag.robot.io import (
@@ -64,12 +65,10 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:  # noqa: ANN401 - a lazily imported attribute
+def __getattr__(name: str) -> object:
     """Import the py_trees parts on first use."""
     module = _LAZY.get(name)
     if module is None:
         msg = f"module 'swarmtag.robot' has no attribute {name!r}"
         raise AttributeError(msg)
-    import importlib  # noqa: PLC0415
-
     return getattr(importlib.import_module(module), name)

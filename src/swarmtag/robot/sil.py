@@ -89,7 +89,8 @@ class TreeController:
                 if s.mode[row, robot] == Mode.BROKEN:
                     continue
                 self._views[row, robot].context = context
-                self._trees[row, robot].tick()
+                # the root alone: the tree's own tick adds visitors and handlers, unused here
+                self._trees[row, robot].root.tick_once()
 
     def _report(self, context: StepContext, events: TickEvents) -> None:
         """The reported decisions as the step's events, one entry per kind."""

@@ -19,6 +19,7 @@ robot has its own tree and its own blackboard namespace.
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -146,7 +147,19 @@ def ascii_picture(tree: py_trees.trees.BehaviourTree) -> str:
     return py_trees.display.ascii_tree(tree.root)
 
 
-def dot_picture(tree: py_trees.trees.BehaviourTree, folder: Path, name: str = "robot-tree") -> Path:
-    """Write the tree as Graphviz dot (and PNG/SVG where Graphviz is installed) into ``folder``."""
-    written = py_trees.display.render_dot_tree(tree.root, name=name, target_directory=str(folder))
-    return Path(written["dot"])
+def dot_picture(
+    tree: py_trees.trees.BehaviourTree, folder: Path, name: str = "robot-tree"
+) -> list[Path]:
+    """Write the tree as Graphviz dot, and as PNG and SVG where Graphviz is installed.
+
+    Returns the files written (``folder / name`` with .dot, .png, .svg).
+    """
+    graph = py_trees.display.dot_tree(tree.root)
+    written = [folder / f"{name}.dot"]
+    graph.write(str(written[0]), format="raw")
+    if shutil.which("dot") is not None:
+        for suffix in ("png", "svg"):
+            target = folder / f"{name}.{suffix}"
+            graph.write(str(target), format=suffix)
+            written.append(target)
+    return written

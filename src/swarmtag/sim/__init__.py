@@ -17,7 +17,10 @@ The layers underneath, for other front ends and for tests:
 - ``make_params`` -> ``Params``: the scenario and policy in kernel units;
 - ``sample_scene`` / ``Scene`` / ``initial_state`` -> ``WorldState``;
 - ``RandomSource`` -> ``TickInputs``: the per-tick random numbers of SPEC §4.5;
-- ``step(state, inputs, params) -> (state, TickEvents)``: the pure kernel;
+- ``step(state, inputs, params, controller=BUILTIN) -> (state, TickEvents)``:
+  the pure kernel; the world's phases around a ``Controller``'s three steps
+  (``BUILTIN``: the vectorised built-in controller; ``SimRobotIO``: one
+  robot's view for a per-robot controller such as ``swarmtag.robot``'s tree);
 - ``run_batch``: the loop, event logs, trajectories, invariant checking;
 - ``check_determinism`` / ``check_common_scenes``: checks anyone can run.
 
@@ -26,7 +29,16 @@ See docs/simulator.md for the model, the defaults and the random-stream layout.
 
 from __future__ import annotations
 
+from swarmtag.sim.builtin import BUILTIN, BuiltinController
 from swarmtag.sim.checks import check_common_scenes, check_determinism, run_csv
+from swarmtag.sim.control import (
+    COMMAND_FIELDS,
+    MEMORY_FIELDS,
+    Arrivals,
+    Carrying,
+    Controller,
+    LiftAnswers,
+)
 from swarmtag.sim.events import EventKind, TickEvents
 from swarmtag.sim.groups import (
     Arena,
@@ -43,7 +55,15 @@ from swarmtag.sim.kernel import step
 from swarmtag.sim.params import Params, make_params
 from swarmtag.sim.profiles import DEFAULT_PROFILE, PROFILES, Profile, load_profile
 from swarmtag.sim.randomness import RandomSource, Stream, TickInputs, stream
-from swarmtag.sim.runner import InputSource, SimResult, run_batch, seeded_state, simulate
+from swarmtag.sim.robot_view import SimRobotIO, StepContext
+from swarmtag.sim.runner import (
+    CONTROLLERS,
+    InputSource,
+    SimResult,
+    run_batch,
+    seeded_state,
+    simulate,
+)
 from swarmtag.sim.scenario import Scenario
 from swarmtag.sim.scene import sample_scene
 from swarmtag.sim.sensors import Camera, Radio
@@ -51,15 +71,24 @@ from swarmtag.sim.state import Mode, Scene, WorldState, initial_state
 from swarmtag.sim.trajectories import Geometry, Trajectories
 
 __all__ = [
+    "BUILTIN",
+    "COMMAND_FIELDS",
+    "CONTROLLERS",
     "DEFAULT_PROFILE",
+    "MEMORY_FIELDS",
     "OVERLAP_TOLERANCE",
     "PROFILES",
     "Arena",
+    "Arrivals",
     "Bodies",
+    "BuiltinController",
     "Camera",
+    "Carrying",
+    "Controller",
     "EventKind",
     "Geometry",
     "InputSource",
+    "LiftAnswers",
     "Mode",
     "Motion",
     "Params",
@@ -71,6 +100,8 @@ __all__ = [
     "Scenario",
     "Scene",
     "SimResult",
+    "SimRobotIO",
+    "StepContext",
     "Stream",
     "TickEvents",
     "TickInputs",

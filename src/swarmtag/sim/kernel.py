@@ -85,7 +85,7 @@ def step(
     resolve(s, move(s, params), params)
     arrivals = controller.arrive(state, s, params=params, t=t)
     dock(s, arrivals)
-    answers = answer_lifts(s, arrivals.lift, t, events)
+    answers = answer_lifts(s, arrivals.lift, params=params, t=t, events=events)
     carrying = controller.carry(s, answers, params=params, t=t)
     deliver(s, carrying, answers=answers, params=params, t=t, events=events)
     _end_of_tick(s, params, t)

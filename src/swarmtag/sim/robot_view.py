@@ -12,6 +12,7 @@ identical.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +23,7 @@ from swarmtag.robot.io import (
     Pose,
     RandomDraws,
     Report,
+    RobotIO,
     TagStates,
 )
 from swarmtag.sim.geometry import length
@@ -253,3 +255,10 @@ class SimRobotIO:
     def report(self, kind: Report, carrier: int, value: float) -> None:
         """Log a decision."""
         self.context.reports.append((kind, self.row, self._robot, carrier, value))
+
+
+if TYPE_CHECKING:
+
+    def _is_robot_io(view: SimRobotIO) -> RobotIO:
+        """The type checker's proof that the view implements the protocol."""
+        return view

@@ -252,8 +252,14 @@ def simulate(
     source = RandomSource(params, seed=seed, run_ids=state.run_ids)
     if controller == "builtin":
         return run_batch(state, params, source, seed=seed, record=record, check=check)
-    from swarmtag.robot.sil import TreeController  # noqa: PLC0415 - py_trees is an extra
-
+    try:
+        from swarmtag.robot.sil import TreeController  # noqa: PLC0415 - py_trees is an extra
+    except ModuleNotFoundError as missing:
+        msg = (
+            f"controller: 'bt' needs {missing.name} (install the robot extra: "
+            "pip install 'swarmtag[robot]')"
+        )
+        raise ConfigError(msg) from None
     trees = TreeController()
     try:
         return run_batch(

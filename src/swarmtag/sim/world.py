@@ -6,12 +6,16 @@
 - ``dock`` (after ``arrive``): a robot that drives in may overlap its
   carrier; a robot that starts centring stands on the carrier's centre.
 - ``answer_lifts``: each tag answers the robots' lift writes: it accepts
-  AWAITING_PICKUP -> PICKED_UP only from AWAITING_PICKUP, from a robot
-  under it (``tag.ROBOT_TRANSITIONS`` as a table), and of several robots
-  writing to one carrier in the same tick the smallest id wins.
+  AWAITING_PICKUP -> PICKED_UP only from AWAITING_PICKUP
+  (``tag.ROBOT_TRANSITIONS`` as a table), and of several robots writing to
+  one carrier in the same tick the smallest id wins. The lift itself only
+  raises a carrier the robot stands centred under (it drove in, and is on
+  the centre): a write from anywhere else is refused too.
 - ``deliver`` (after ``carry``): a lifted robot no longer overlaps anything
   but its load; a carrier set down in the drop-off area and written IDLE is
-  delivered and leaves the arena. Predock faces are recomputed in runs in
+  delivered and leaves the arena (the model has no other place to set a
+  carrier down: a controller that lowers one elsewhere, or one it does not
+  hold, is a ``SimulationError``). Predock faces are recomputed in runs in
   which a carrier was lifted (one obstacle fewer).
 """
 
@@ -26,6 +30,7 @@ from swarmtag.errors import SimulationError
 from swarmtag.sim._index import at_robots, is_loaded
 from swarmtag.sim.control import Arrivals, Carrying, LiftAnswers
 from swarmtag.sim.events import EventKind, TickEvents
+from swarmtag.sim.geometry import length
 from swarmtag.sim.params import Params
 from swarmtag.sim.predock import free_faces
 from swarmtag.sim.randomness import TickInputs
@@ -58,8 +63,14 @@ def break_down(s: WorldState, inputs: TickInputs, events: TickEvents) -> None:
     )
     s.target[broken & ~loaded] = -1
     s.face[broken] = -1
-    s.timer[broken] = 0
     s.mode[broken] = Mode.BROKEN
+
+
+def _under(s: WorldState, carrier: Int, params: Params) -> NDArray[np.bool_]:
+    """Robots standing centred under ``carrier`` (R, N): let in, and on its centre."""
+    near = length(s.robot_pos - at_robots(s.carrier_pos, carrier))
+    centred: NDArray[np.bool_] = (s.ghost == carrier) & (near <= params.arrival_tolerance)
+    return centred
 
 
 def dock(s: WorldState, arrivals: Arrivals) -> None:
@@ -69,7 +80,9 @@ def dock(s: WorldState, arrivals: Arrivals) -> None:
     np.copyto(s.robot_pos, centre, where=arrivals.centred[..., None])
 
 
-def answer_lifts(s: WorldState, lift: Int, t: int, events: TickEvents) -> LiftAnswers:
+def answer_lifts(
+    s: WorldState, lift: Int, *, params: Params, t: int, events: TickEvents
+) -> LiftAnswers:
     """The tags' answers to the lift writes ``lift`` (R, N) (carrier, -1 none), applied in place."""
     want = lift >= 0
     if not want.any():
@@ -80,6 +93,7 @@ def answer_lifts(s: WorldState, lift: Int, t: int, events: TickEvents) -> LiftAn
         & ROBOT_WRITE_ALLOWED[status, int(TagStatus.PICKED_UP)]
         & (at_robots(s.carried_by, lift) < 0)
         & at_robots(s.present, lift)
+        & _under(s, lift, params)
     )
     robots = s.mode.shape[1]
     index = np.arange(robots)
@@ -114,8 +128,17 @@ def deliver(
     done = carrying.lower >= 0
     if done.any():
         status = at_robots(s.status, carrying.lower).astype(np.int64)
-        if not ROBOT_WRITE_ALLOWED[status[done], int(TagStatus.IDLE)].all():  # pragma: no cover
+        if not ROBOT_WRITE_ALLOWED[status[done], int(TagStatus.IDLE)].all():
             msg = f"tick {t}: a robot released a carrier whose tag is not PICKED_UP"
+            raise SimulationError(msg)
+        holder = at_robots(s.carried_by, carrying.lower)
+        inside = s.robot_pos[..., 0] - params.carrier_half >= params.dropoff_left
+        robots = np.arange(s.mode.shape[1])[None, :]
+        if not ((holder == robots) & inside)[done].all():
+            msg = (
+                f"tick {t}: a robot lowered a carrier it does not hold, or outside the "
+                "drop-off area (the model delivers only into the drop-off area)"
+            )
             raise SimulationError(msg)
         runs, robots = np.nonzero(done)
         carriers = carrying.lower[runs, robots]

@@ -1,0 +1,47 @@
+"""``swarmtag robot``: the robot's controller — its behaviour tree as text and as a picture."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from swarmtag._outputs import OutputPlan
+from swarmtag.errors import ConfigError
+
+__all__ = ["robot"]
+
+
+@click.group("robot")
+def robot() -> None:
+    """The robot's controller (the behaviour tree of SPEC §3.2; the robot extra)."""
+
+
+@robot.command("tree")
+@click.option(
+    "--out",
+    "folder",
+    type=click.Path(path_type=Path),
+    help="Also write the tree as robot-tree.dot (and .png, .svg where Graphviz is installed).",
+)
+def tree_cmd(folder: Path | None) -> None:
+    """Print the behaviour tree every robot runs, as text; draw it with --out."""
+    try:
+        from swarmtag.robot.tree import ascii_picture, create_tree, dot_picture  # noqa: PLC0415
+    except ModuleNotFoundError as missing:
+        msg = f"the behaviour tree needs {missing.name} (pip install 'swarmtag[robot]')"
+        raise ConfigError(msg) from None
+    from swarmtag.policy import Urgency  # noqa: PLC0415
+    from swarmtag.robot import ControllerConfig  # noqa: PLC0415
+    from swarmtag.sim import Scenario, make_params  # noqa: PLC0415
+
+    config = ControllerConfig.from_params(make_params(Scenario.default(), Urgency(alpha=0.7)))
+    tree = create_tree(config, "/swarmtag/cli/robot")
+    plan = OutputPlan()
+    if folder is not None:
+        plan.folder("--out", folder)
+    with plan.writing() as stage:
+        click.echo(ascii_picture(tree), nl=False)
+        if folder is not None:
+            for path in dot_picture(tree, stage.path(folder)):
+                click.echo(f"wrote {folder / path.name}", err=True)

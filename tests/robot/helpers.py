@@ -1,0 +1,41 @@
+"""Scenarios and comparisons shared by the robot tests."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from swarmtag.policy import Policy
+from swarmtag.sim import Scenario, run_csv, simulate
+
+REALISM = {
+    "advertisement_loss": 0.3,
+    "status_delay": 7,
+    "detection_noise": 0.05,
+    "speed_variation": 0.2,
+    "breakdown": 2e-4,
+}
+"""Every optional realism switched on."""
+
+
+def scenario(robots: int, carriers: int, profile: str = "base", **changes: Any) -> Scenario:
+    """A shipped profile's scenario with some keys changed (tables merged)."""
+    mapping = Scenario.default(robots, carriers, profile=profile).to_mapping()
+    for key, value in changes.items():
+        if isinstance(value, dict):
+            mapping.setdefault(key, {}).update(value)
+        else:
+            mapping[key] = value
+    return Scenario.from_mapping(mapping)
+
+
+def differing_runs(
+    scenario: Scenario, policy: Policy, *, seed: int, runs: int, run_offset: int = 0
+) -> list[int]:
+    """Runs whose event logs (carrier rows and event rows) differ between the two controllers."""
+    builtin = simulate(scenario, policy, seed=seed, runs=runs, run_offset=run_offset)
+    trees = simulate(scenario, policy, seed=seed, runs=runs, run_offset=run_offset, controller="bt")
+    return [
+        int(run)
+        for i, run in enumerate(builtin.run_ids)
+        if run_csv(builtin, i) != run_csv(trees, i)
+    ]
