@@ -54,9 +54,7 @@ def main() -> None:
     for mean in (1500, 1800, 2100, 2400, 2700, 3000):
         p95, mean_latency, throughput, share = kpis(mean)
         print(f"| {mean} | {p95:.0f} | {mean_latency:.0f} | {throughput:.3f} | {share:.1%} |")
-    print(
-        "| published 3/7 proximity | 4979 [4640, 5086] | 2638 [2531, 2738] | 0.266 [0.250, 0.285] | - |"
-    )
+    print("| published 3/7 proximity | 4979 [4640, 5086] | 2638 [2531, 2738] | 0.266 [0.250, 0.285] | - |")
 
 
 if __name__ == "__main__":
