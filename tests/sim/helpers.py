@@ -14,6 +14,7 @@ from swarmtag.sim import (
     SimResult,
     TickInputs,
     WorldState,
+    due_writes,
     initial_state,
     make_params,
     run_batch,
@@ -59,6 +60,7 @@ class Script:
             walk=self._walk,
             sidestep=self._sidestep,
             breakdown=breakdown,
+            writes=due_writes(self._params, tick),
         )
 
 

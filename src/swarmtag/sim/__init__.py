@@ -54,7 +54,7 @@ from swarmtag.sim.invariants import OVERLAP_TOLERANCE, check_tick
 from swarmtag.sim.kernel import step
 from swarmtag.sim.params import Params, make_params
 from swarmtag.sim.profiles import DEFAULT_PROFILE, PROFILES, Profile, load_profile
-from swarmtag.sim.randomness import RandomSource, Stream, TickInputs, stream
+from swarmtag.sim.randomness import RandomSource, Stream, TickInputs, due_writes, stream
 from swarmtag.sim.robot_view import SimRobotIO, StepContext
 from swarmtag.sim.runner import (
     CONTROLLERS,
@@ -113,6 +113,7 @@ __all__ = [
     "check_common_scenes",
     "check_determinism",
     "check_tick",
+    "due_writes",
     "initial_state",
     "load_profile",
     "make_params",

@@ -36,7 +36,7 @@ from swarmtag.io import MISSING_ID, EventTable
 from swarmtag.sim.geometry import Float
 from swarmtag.sim.state import Int
 
-__all__ = ["EventKind", "EventRecorder", "TickEvents"]
+__all__ = ["CarrierEvent", "EventKind", "EventRecorder", "TickEvents"]
 
 
 class EventKind(IntEnum):
@@ -68,16 +68,31 @@ class RobotEvents:
     value: Float
 
 
+@dataclass(frozen=True)
+class CarrierEvent:
+    """An event of one carrier without a robot (an operator write) in batch row ``run``."""
+
+    kind: EventKind
+    run: int
+    carrier: int
+    value: float
+
+
 @dataclass(eq=False)
 class TickEvents:
     """The events of one tick, collected by the kernel phases in phase order."""
 
     entries: list[RobotEvents] = field(default_factory=list)
+    carrier_entries: list[CarrierEvent] = field(default_factory=list)
 
     def add(self, kind: EventKind, mask: NDArray[np.bool_], carrier: Int, value: Float) -> None:
         """Record ``kind`` for the robots in ``mask`` (copies are kept)."""
         if mask.any():
             self.entries.append(RobotEvents(kind, mask.copy(), carrier.copy(), value.copy()))
+
+    def add_carrier(self, kind: EventKind, run: int, carrier: int, value: float) -> None:
+        """Record ``kind`` for ``carrier`` of batch row ``run`` (no robot)."""
+        self.carrier_entries.append(CarrierEvent(kind, run, carrier, value))
 
     def masked(self, keep: NDArray[np.bool_]) -> TickEvents:
         """The same events restricted to the runs where ``keep`` (shape (R,)) is true."""
@@ -86,7 +101,8 @@ class TickEvents:
                 RobotEvents(e.kind, e.mask & keep[:, None], e.carrier, e.value)
                 for e in self.entries
                 if (e.mask & keep[:, None]).any()
-            ]
+            ],
+            [e for e in self.carrier_entries if keep[e.run]],
         )
 
     def count(self, kind: EventKind, runs: int) -> NDArray[np.int64]:
@@ -105,7 +121,7 @@ class EventRecorder:
         self._rows: list[tuple[Int, Int, Int, Int, Int, Float]] = []
 
     def add_tick(self, tick: int, events: TickEvents) -> None:
-        """Rows for every robot event of ``tick``."""
+        """Rows for every event of ``tick``."""
         for entry in events.entries:
             runs, robots = np.nonzero(entry.mask)
             self._rows.append(
@@ -118,21 +134,17 @@ class EventRecorder:
                     entry.value[runs, robots],
                 )
             )
-
-    def add_carrier_event(
-        self, tick: int, kind: EventKind, run: int, carrier: int, value: float
-    ) -> None:
-        """One row without a robot (operator writes)."""
-        self._rows.append(
-            (
-                np.array([run]),
-                np.array([tick]),
-                np.array([int(kind)]),
-                np.array([carrier]),
-                np.array([MISSING_ID]),
-                np.array([value]),
+        for event in events.carrier_entries:
+            self._rows.append(
+                (
+                    np.array([event.run]),
+                    np.array([tick]),
+                    np.array([int(event.kind)]),
+                    np.array([event.carrier]),
+                    np.array([MISSING_ID]),
+                    np.array([event.value]),
+                )
             )
-        )
 
     def table(
         self,

@@ -6,10 +6,10 @@ breakdowns (``world``) -> the controller decides -> move and resolve
 collisions (``motion``) -> the controller arrives -> docking and the tags'
 answers to lift writes (``world``) -> the controller carries -> deliveries
 (``world``) -> end of tick (tags' urgency growth, the advertised state
-history, run ends). It returns the next state and the tick's events; the
-state it is given is left untouched. Operator writes (re-prioritisations)
-are applied by the caller after ``step`` (``swarmtag.sim.wms``), as the
-last thing in the tick.
+history, run ends) -> the operator writes due this tick (``wms``, fed by
+``inputs.writes``). It returns the next state and the tick's events; the
+state it is given is left untouched. The whole tick happens here, so
+another backend given the same state and inputs can reproduce it.
 
 A run that has ended (every carrier delivered, or its time limit) is frozen:
 its state no longer changes and it records no events.
@@ -31,6 +31,7 @@ from swarmtag.sim.randomness import TickInputs
 from swarmtag.sim.sense import sense
 from swarmtag.sim.state import WorldState
 from swarmtag.sim.urgency import growing_urgency
+from swarmtag.sim.wms import operator_writes
 from swarmtag.sim.world import answer_lifts, break_down, deliver, dock
 
 __all__ = ["step"]
@@ -89,6 +90,7 @@ def step(
     carrying = controller.carry(s, answers, params=params, t=t)
     deliver(s, carrying, answers=answers, params=params, t=t, events=events)
     _end_of_tick(s, params, t)
+    operator_writes(s, inputs.writes, t=t, events=events)
     ended = state.ended_at >= 0
     if ended.any():
         return _freeze(state, s, ended), events.masked(~ended)

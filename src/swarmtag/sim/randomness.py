@@ -41,9 +41,18 @@ from numpy.typing import ArrayLike, NDArray
 from swarmtag._checks import MAX_SEED, check_int
 from swarmtag.errors import ConfigError
 from swarmtag.sim.geometry import Float, length
+from swarmtag.sim.groups import Reprioritisation
 from swarmtag.sim.params import Params
 
-__all__ = ["RandomSource", "Stream", "TickInputs", "check_seed", "stream", "unit_vectors"]
+__all__ = [
+    "RandomSource",
+    "Stream",
+    "TickInputs",
+    "check_seed",
+    "due_writes",
+    "stream",
+    "unit_vectors",
+]
 
 _BLOCK_BYTES: Final = 16 * 2**20
 """Pre-draw at most about this many bytes per run and stream (a memory bound, not a result)."""
@@ -106,6 +115,7 @@ class TickInputs:
     heard: NDArray[np.bool_] | None = None
     noise: Float | None = None
     turn: Float | None = None
+    writes: tuple[Reprioritisation, ...] = ()
 
     @classmethod
     def fixed(
@@ -116,8 +126,11 @@ class TickInputs:
         walk: ArrayLike = (1.0, 0.0),
         sidestep: ArrayLike = (0.0, 1.0),
         breakdown: ArrayLike = False,
+        writes: tuple[Reprioritisation, ...] = (),
     ) -> TickInputs:
         """Inputs with given values broadcast to the batch (hand-built tests and examples).
+
+        ``writes`` are the operator writes due this tick (see ``due_writes``).
 
         >>> TickInputs.fixed(1, 2, walk=(0.0, -1.0)).walk
         array([[[ 0., -1.],
@@ -128,14 +141,21 @@ class TickInputs:
             walk=np.broadcast_to(np.asarray(walk, dtype=np.float64), (*shape, 2)).copy(),
             sidestep=np.broadcast_to(np.asarray(sidestep, dtype=np.float64), (*shape, 2)).copy(),
             breakdown=np.broadcast_to(np.asarray(breakdown, dtype=bool), shape).copy(),
+            writes=writes,
         )
+
+
+def due_writes(params: Params, tick: int) -> tuple[Reprioritisation, ...]:
+    """The scenario's operator writes scheduled for ``tick``, in schedule order."""
+    return tuple(w for w in params.scenario.reprioritisations if w.tick == tick)
 
 
 class RandomSource:
     """The per-tick inputs of a batch of seeded runs, drawn from the runs' own streams.
 
     Call ``inputs(t)`` for t = 1, 2, ... in order. Blocks are pre-drawn
-    ``chunk`` ticks at a time per run (same numbers as tick by tick).
+    ``chunk`` ticks at a time per run (same numbers as tick by tick). The
+    inputs also carry the scenario's operator writes due at each tick.
     """
 
     def __init__(
@@ -209,4 +229,5 @@ class RandomSource:
             heard=heard,
             noise=noise,
             turn=turn,
+            writes=due_writes(params, tick),
         )

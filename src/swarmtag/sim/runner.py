@@ -1,9 +1,9 @@
 """Running batches: ``simulate`` (seeded runs) and ``run_batch`` (any start state and inputs).
 
 The thin stateful wrapper around the pure kernel: it draws the scenes and
-the per-tick random inputs, steps the kernel tick by tick (a Python loop
-over ticks, everything else vectorised over runs and robots), applies the
-operator's scheduled writes, records events (and trajectories), and builds
+the per-tick random inputs (and the operator's scheduled writes), steps the
+kernel tick by tick (a Python loop over ticks, everything else vectorised
+over runs and robots), records events (and trajectories), and builds
 the event logs of SPEC §8.1.
 """
 
@@ -31,7 +31,6 @@ from swarmtag.sim.scenario import Scenario
 from swarmtag.sim.scene import sample_scene
 from swarmtag.sim.state import Int, Mode, WorldState, initial_state
 from swarmtag.sim.trajectories import Trajectories, TrajectoryRecorder
-from swarmtag.sim.wms import Operator
 from swarmtag.tag import TagStatus
 
 __all__ = [
@@ -128,7 +127,6 @@ def run_batch(
     ``controller`` decides for the robots (``swarmtag.sim.control``).
     """
     limit = params.run_ticks - state.tick if ticks is None else check_int("ticks", ticks, low=0)
-    operator = Operator(params.scenario.reprioritisations, state.runs)
     events = EventRecorder()
     breakdowns = np.zeros(state.runs, dtype=np.int64)
     recorder = TrajectoryRecorder(state, limit) if record else None
@@ -138,7 +136,6 @@ def run_batch(
             break
         t = state.tick + 1
         after, tick_events = step(state, source.inputs(t), params, controller)
-        after = operator.apply(after, events)
         if check:
             check_tick(state, after, tick_events, params)
         events.add_tick(t, tick_events)

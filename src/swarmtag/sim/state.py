@@ -143,6 +143,8 @@ class WorldState:
     """(R, C) the tag's urgency when it was delivered; -1 not delivered."""
     ended_at: Int
     """(R,) tick at which the run ended (all carriers delivered or time limit); -1 running."""
+    operator_counter: Int
+    """(R,) the last counter the run's operator (WMS) signed a write with; -1 none yet."""
 
     @property
     def runs(self) -> int:
@@ -357,4 +359,5 @@ def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -
         deliverer=np.full((runs, c), -1, dtype=np.int64),
         delivery_urgency=np.full((runs, c), -1, dtype=np.int8),
         ended_at=np.full(runs, -1, dtype=np.int64),
+        operator_counter=np.full(runs, -1, dtype=np.int64),
     )
