@@ -117,3 +117,14 @@ def test_recorded_trajectories_are_identical():
 def test_an_unknown_controller_is_refused():
     with pytest.raises(ConfigError, match="controller"):
         simulate(scenario(3, 7, ticks=10), Proximity(), seed=0, runs=1, controller="ros")
+
+
+def test_without_py_trees_the_tree_controller_is_refused_in_one_line(monkeypatch):
+    import sys
+
+    for name in [m for m in sys.modules if m.startswith(("swarmtag.robot.", "py_trees"))]:
+        if name not in ("swarmtag.robot.io", "swarmtag.robot.config"):
+            monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "py_trees", None)  # as if the robot extra were missing
+    with pytest.raises(ConfigError, match=r"needs py_trees .*swarmtag\[robot\]"):
+        simulate(scenario(3, 7, ticks=10), Proximity(), seed=0, runs=1, controller="bt")

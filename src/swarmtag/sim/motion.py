@@ -5,8 +5,10 @@ robot in PREDOCK drives straight at the predock point of its face, DOCK at
 the carrier centre, TRANSPORT at its drop-off goal (or along its sidestep),
 each landing exactly on the goal when nearer than a step. Robots that
 centre, lift, release or are broken stand still. Headings turn at most one
-turn step per tick: towards the walk or travel direction, and in PREDOCK
-towards the carrier (the inward normal of the face).
+turn step per tick: a walking robot towards its walk direction, a moving
+transporter towards its travel direction, and in PREDOCK towards the
+carrier (the inward normal of the face); a docking robot already faces its
+carrier and keeps its heading.
 
 Resolve (Jacobi): ``collision_iterations`` passes; each computes every
 overlap from the positions at the start of the pass, then moves every robot
