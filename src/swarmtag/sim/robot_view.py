@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from swarmtag.robot.io import (
     ControlStep,
@@ -48,14 +49,15 @@ class StepContext:
     params: Params
     senses: Senses | None = None
     inputs: TickInputs | None = None
-    accepted: np.ndarray | None = None
-    refused: np.ndarray | None = None
-    drive_in: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-    centred: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-    lift: Int = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    raised: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-    lower: Int = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    reports: list[tuple[Report, int, int, int, float]] = field(default_factory=list)
+    accepted: NDArray[np.bool_] | None = None
+    refused: NDArray[np.bool_] | None = None
+    drive_in: NDArray[np.bool_] = field(init=False)
+    centred: NDArray[np.bool_] = field(init=False)
+    lift: Int = field(init=False)
+    raised: NDArray[np.bool_] = field(init=False)
+    lower: Int = field(init=False)
+    """The requests being collected, (R, N) each (see ``swarmtag.sim.control``)."""
+    reports: list[tuple[Report, int, int, int, float]] = field(init=False, default_factory=list)
     """(kind, row, robot, carrier, value) in the order reported."""
 
     def __post_init__(self) -> None:
