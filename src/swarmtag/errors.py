@@ -14,14 +14,15 @@ what to do instead.
     │   ├── UrgencyRangeError               urgency byte above 9
     │   └── UnknownStatusError              status byte not 0, 1 or 2
     ├── WriteRejected                       a tag refused an authenticated write
-    │   ├── MalformedWrite                  bad length, version, role, mask or padding
-    │   ├── ForgedWrite                     the MAC does not verify under the site key
+    │   ├── MalformedWrite                  bad length, version, reserved bits or padding
+    │   ├── ForgedWrite                     the MAC does not verify under the named role's key
     │   ├── WrongTarget                     the write names another tag
     │   ├── ReplayedWrite                   counter not above the writer's highest seen
     │   ├── RoleNotAllowed                  that role may not change that field
     │   ├── IllegalTransition               that role may not make that status change
     │   └── WriterTableFull                 the tag already tracks as many writers as it can
     ├── StateRecordError (ValueError)       a persisted tag record is corrupt or unknown
+    ├── KeyFileError (ValueError)           a site key file is missing, not private or malformed
     ├── PolicyError (ValueError)            bad policy parameter, condition name or inputs
     ├── EventLogError (ValueError)          an event log breaks the schema (names file, row, column)
     ├── StatisticsError (ValueError)        statistics input refused (no runs, unknown baseline)
@@ -50,6 +51,7 @@ __all__ = [
     "ForgedWrite",
     "IllegalTransition",
     "InvariantError",
+    "KeyFileError",
     "MalformedWrite",
     "OutputError",
     "PayloadError",
@@ -114,13 +116,13 @@ class WriteRejected(SwarmtagError):
 
 
 class MalformedWrite(WriteRejected):
-    """The write is not a well-formed swarmtag write (length, version, role, mask, padding)."""
+    """The write is not a well-formed swarmtag write (length, version, reserved bits, padding)."""
 
     att_error = 0x0D  # ATT "Invalid Attribute Value Length" / malformed value
 
 
 class ForgedWrite(WriteRejected):
-    """The MAC does not verify under the site key."""
+    """The MAC does not verify under the key of the role the flags name (or name no role)."""
 
     att_error = 0x80
 
@@ -157,6 +159,14 @@ class WriterTableFull(WriteRejected):
 
 class StateRecordError(SwarmtagError, ValueError):
     """A persisted tag state record is corrupt, truncated or of an unknown version."""
+
+
+class KeyFileError(SwarmtagError, ValueError):
+    """A site key file cannot be used: missing, readable by others, or not a key file.
+
+    The message names the file and what to do; it never contains the key or
+    any other byte of the file, so it is safe to log.
+    """
 
 
 class PolicyError(SwarmtagError, ValueError):

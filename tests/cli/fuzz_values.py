@@ -384,6 +384,8 @@ BY_COMMAND: dict[tuple[str, ...], dict[str, Values]] = {
         "sources": Values(STUDY_SOURCE.good, STUDY_SOURCE.bad, rare=True),  # runs and reports
     },
     ("robot", "tree"): {"folder": folder_output()},
+    ("tag", "render"): {"out": file_output(".png")},
+    ("tag", "keygen"): {"out": file_output(".key")},
     ("calibrate",): {
         "baseline": BASELINE,
         "out": with_inputs(file_output(".toml")),
@@ -432,5 +434,7 @@ OUTPUTS: dict[tuple[str, ...], dict[str, str]] = {
     ("study", "report"): {"out_dir": "folder"},
     ("reproduce",): {"out_dir": "folder"},
     ("robot", "tree"): {"folder": "folder"},
+    ("tag", "render"): {"out": "file"},
+    ("tag", "keygen"): {"out": "file"},
 }
 """The outputs of each command, by parameter name: what a success must have written."""

@@ -96,8 +96,10 @@ NORMAL_EXAMPLES = {
     ("calibrate",): 250,
     ("demo",): 8,
     ("robot", "tree"): 40,
+    ("tag", "render"): 60,
+    ("tag", "keygen"): 40,
 }
-"""Invocations per command in the normal suite (2,048 in all)."""
+"""Invocations per command in the normal suite (2,148 in all)."""
 TOTAL = int(os.environ.get("SWARMTAG_FUZZ_EXAMPLES", "0")) or sum(NORMAL_EXAMPLES.values())
 """Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``."""
 HANG_SECONDS = 60

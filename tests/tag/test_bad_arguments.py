@@ -40,11 +40,14 @@ from swarmtag.tag import (
     apply_change,
     decode,
     decode_manufacturer_data,
+    derive_role_key,
     encode,
     encode_manufacturer_data,
 )
 
-KEY = bytes(range(16))
+KEY = bytes(range(16))  # the site key
+ROBOT_KEY = derive_role_key(KEY, Role.ROBOT)
+OPERATOR_KEY = derive_role_key(KEY, Role.OPERATOR)
 STATE = TagState(urgency=7, status=TagStatus.AWAITING_PICKUP, destination=3, marker=12)
 
 
@@ -73,7 +76,7 @@ def test_apply_refuses_non_bytes_with_malformed_write(message):
 
 @pytest.mark.parametrize("wrap", [bytes, bytearray, memoryview])
 def test_apply_accepts_every_bytes_like_form(wrap):
-    robot = WriteSigner(writer=7, role=Role.ROBOT, key=KEY)
+    robot = WriteSigner(writer=7, role=Role.ROBOT, key=ROBOT_KEY)
     tag = _tag()
     assert tag.apply(wrap(robot.sign(12, Change(status=TagStatus.PICKED_UP)))).status is (
         TagStatus.PICKED_UP
@@ -99,7 +102,7 @@ def test_writer_table_capacity_fits_the_record_and_a_flash_page():
 def test_new_writer_beyond_capacity_is_refused_and_changes_nothing():
     tag, store = _full_tag()
     before = store.load()
-    newcomer = WriteSigner(writer=1, role=Role.OPERATOR, key=KEY)
+    newcomer = WriteSigner(writer=1, role=Role.OPERATOR, key=OPERATOR_KEY)
     with pytest.raises(WriterTableFull, match=f"{MAX_WRITERS} writers") as caught:
         tag.apply(newcomer.sign(12, Change(urgency=9)))
     assert caught.value.att_error == 0x85
@@ -112,7 +115,7 @@ def test_new_writer_beyond_capacity_is_refused_and_changes_nothing():
 
 def test_known_writers_keep_working_when_the_table_is_full():
     tag, store = _full_tag()
-    known = WriteSigner(writer=0xFFFF, role=Role.OPERATOR, key=KEY, counter=5)
+    known = WriteSigner(writer=0xFFFF, role=Role.OPERATOR, key=OPERATOR_KEY, counter=5)
     assert tag.apply(known.sign(12, Change(urgency=1))).urgency == 1
     assert tag.counters[0xFFFF] == 6
     assert len(tag.counters) == MAX_WRITERS
@@ -146,10 +149,11 @@ def test_records_beyond_capacity_are_refused():
         ({"role": None}, "role: None"),
         ({"role": 1.0}, "role: 1.0"),
         ({"role": True}, "role: True"),
-        ({"key": "a text key of 16+"}, "site_key: .*got str"),
-        ({"key": None}, "site_key"),
-        ({"key": b"short"}, "site_key: must be at least 16 bytes, got 5"),
-        ({"key": 16}, "site_key"),
+        ({"key": "a text key of 16+"}, "key: .*got str"),
+        ({"key": None}, "key: .*got NoneType"),
+        ({"key": b"short"}, "key: a role key is 32 bytes, got 5"),
+        ({"key": KEY}, r"key: a role key is 32 bytes, got 16; get one with derive_role_key"),
+        ({"key": 16}, "key: .*got int"),
         ({"writer": -1}, "writer: -1"),
         ({"writer": 0x10000}, "writer: 65536"),
         ({"writer": "7"}, "writer: '7'"),
@@ -162,17 +166,17 @@ def test_records_beyond_capacity_are_refused():
 )
 def test_write_signer_arguments_refused(fields, words):
     with pytest.raises(FieldRangeError, match=words):
-        WriteSigner(**{"writer": 7, "role": Role.ROBOT, "key": KEY, **fields})
+        WriteSigner(**{"writer": 7, "role": Role.ROBOT, "key": ROBOT_KEY, **fields})
 
 
 def test_write_signer_accepts_role_numbers_and_key_views():
-    signer = WriteSigner(writer=7, role=2, key=memoryview(KEY))
+    signer = WriteSigner(writer=7, role=2, key=memoryview(OPERATOR_KEY))
     assert signer.role is Role.OPERATOR
-    assert signer.key == KEY
+    assert signer.key == OPERATOR_KEY
 
 
 def test_exhausted_or_corrupted_counter_refused_without_advancing():
-    signer = WriteSigner(writer=7, role=Role.OPERATOR, key=KEY, counter=0xFFFF_FFFF)
+    signer = WriteSigner(writer=7, role=Role.OPERATOR, key=OPERATOR_KEY, counter=0xFFFF_FFFF)
     with pytest.raises(FieldRangeError, match="last counter"):
         signer.sign(12, Change(urgency=1))
     assert signer.counter == 0xFFFF_FFFF

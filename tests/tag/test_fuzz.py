@@ -23,6 +23,7 @@ from swarmtag.tag import (
     WriteSigner,
     decode,
     decode_manufacturer_data,
+    derive_role_key,
 )
 
 CASES = 100_000
@@ -109,7 +110,7 @@ def test_write_fuzz_random_bytes_and_bit_flips():
         except WriteRejected:
             continue
         raise AssertionError(f"seed {seed}: random bytes accepted: {message.hex()}")
-    operator = WriteSigner(writer=9, role=Role.OPERATOR, key=KEY)
+    operator = WriteSigner(writer=9, role=Role.OPERATOR, key=derive_role_key(KEY, Role.OPERATOR))
     for _ in range(2_000):
         message = bytearray(operator.sign(12, Change(urgency=int(rng.integers(0, 10)))))
         bit = int(rng.integers(0, 160))

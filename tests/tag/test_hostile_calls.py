@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import contextlib
 import inspect
+import os
 import tempfile
 from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import swarmtag.tag
@@ -35,14 +36,18 @@ from swarmtag.tag import (
     apply_change,
     decode,
     decode_manufacturer_data,
+    derive_role_key,
     encode,
     encode_manufacturer_data,
+    read_key_file,
     sign,
     verify,
+    write_key_file,
 )
 from tests.strategies import changes, tag_states
 
-KEY = bytes(range(16))
+KEY = bytes(range(16))  # the site key
+ROLE_KEYS = {role: derive_role_key(KEY, role) for role in Role}
 MARKER = 12
 START = TagState(urgency=3, status=TagStatus.AWAITING_PICKUP, destination=0, marker=MARKER)
 
@@ -89,11 +94,12 @@ hostile = st.one_of(
     st.sampled_from(TagStatus),
     st.sampled_from(Role),
     st.just(KEY),
+    st.sampled_from(list(ROLE_KEYS.values())),  # 32 bytes: a role key, or a key file's key
     tag_states,
     changes,
     writes,
     records,
-    writes.map(lambda write: sign(write, KEY)),  # authentic 20-byte writes
+    writes.map(lambda write: sign(write, ROLE_KEYS[write.role])),  # authentic 20-byte writes
     tag_states.map(encode),  # valid advertisements
     tag_states.map(encode_manufacturer_data),
     st.builds(MemoryStore),
@@ -127,12 +133,29 @@ def _file_store_save(record: object) -> None:
 
 
 def _signer_sign(target: object, change: object) -> bytes:
-    signer = WriteSigner(writer=1, role=Role.OPERATOR, key=KEY)
+    signer = WriteSigner(writer=1, role=Role.OPERATOR, key=ROLE_KEYS[Role.OPERATOR])
     try:
         return signer.sign(target, change)
     except SwarmtagError:
         assert signer.counter == -1  # a refused argument does not use up a counter
         raise
+
+
+def _stays_in_scratch(path: object) -> bool:
+    """False for a path that could reach outside the scratch folder (absolute, or '..')."""
+    text = os.fspath(path) if isinstance(path, str | os.PathLike) else None
+    return not isinstance(text, str) or not (Path(text).is_absolute() or ".." in Path(text).parts)
+
+
+def _in_scratch(call: Callable[..., object]) -> Callable[..., object]:
+    """``call`` run in a fresh scratch folder, for paths that stay inside it."""
+
+    def scratch(path: object, *args: object) -> object:
+        assume(_stays_in_scratch(path))
+        with tempfile.TemporaryDirectory() as folder, contextlib.chdir(folder):
+            return call(path, *args)
+
+    return scratch
 
 
 # name -> (call taking positional arguments, number of arguments, type of a successful result)
@@ -176,13 +199,17 @@ TARGETS: dict[str, tuple[Callable[..., object], int, type | tuple[type, ...]]] =
     "decode": (decode, 1, TagState),
     "decode_manufacturer_data": (decode_manufacturer_data, 1, TagState),
     "encode": (encode, 1, bytes),
+    "derive_role_key": (derive_role_key, 2, bytes),
     "encode_manufacturer_data": (encode_manufacturer_data, 1, dict),
+    "read_key_file": (_in_scratch(read_key_file), 1, bytes),
+    "write_key_file": (_in_scratch(write_key_file), 2, Path),
     "sign": (sign, 2, bytes),
     "verify": (verify, 2, Write),
 }
 
 NOT_SWEPT = {
     "MemoryStore": "takes no arguments",
+    "generate_site_key": "takes no arguments",
     "TagStore": "a typing.Protocol: describes stores, is never called",
     "TagStore.save": "a Protocol method without a body",
 }

@@ -24,11 +24,14 @@ from swarmtag.tag import (
     TagStatus,
     Write,
     WriteSigner,
+    derive_role_key,
     sign,
 )
 from tests.strategies import bytes_values, changes, statuses, urgencies
 
-KEY = b"site-key-for-tests-0123456789abc"
+KEY = b"site-key-for-tests-0123456789abc"  # the site key: what a tag holds
+ROBOT_KEY = derive_role_key(KEY, Role.ROBOT)  # what a robot holds
+OPERATOR_KEY = derive_role_key(KEY, Role.OPERATOR)  # what an operator or the WMS holds
 MARKER = 12
 ROBOT_MOVES = {
     (TagStatus.AWAITING_PICKUP, TagStatus.PICKED_UP),
@@ -44,8 +47,8 @@ def _provision(status: TagStatus = TagStatus.AWAITING_PICKUP) -> tuple[TagModel,
 
 def test_full_cycle_operator_robot_robot():
     tag, store = _provision(TagStatus.IDLE)
-    operator = WriteSigner(writer=100, role=Role.OPERATOR, key=KEY)
-    robot = WriteSigner(writer=1, role=Role.ROBOT, key=KEY)
+    operator = WriteSigner(writer=100, role=Role.OPERATOR, key=OPERATOR_KEY)
+    robot = WriteSigner(writer=1, role=Role.ROBOT, key=ROBOT_KEY)
     assert tag.apply(operator.sign(MARKER, Change(status=TagStatus.AWAITING_PICKUP, urgency=8)))
     assert (
         tag.apply(robot.sign(MARKER, Change(status=TagStatus.PICKED_UP))).status
@@ -61,10 +64,11 @@ def test_full_cycle_operator_robot_robot():
 @pytest.mark.parametrize(
     ("message", "error"),
     [
-        (sign(Write(writer=1, role=Role.ROBOT, counter=0, target=13, change=Change(status=TagStatus.PICKED_UP)), KEY), WrongTarget),
-        (sign(Write(writer=1, role=Role.ROBOT, counter=0, target=MARKER, change=Change(urgency=0)), KEY), RoleNotAllowed),
-        (sign(Write(writer=1, role=Role.ROBOT, counter=0, target=MARKER, change=Change(status=TagStatus.IDLE)), KEY), IllegalTransition),
-        (sign(Write(writer=1, role=Role.OPERATOR, counter=0, target=MARKER, change=Change(urgency=0)), b"not-the-site-key"), ForgedWrite),
+        (sign(Write(writer=1, role=Role.ROBOT, counter=0, target=13, change=Change(status=TagStatus.PICKED_UP)), ROBOT_KEY), WrongTarget),
+        (sign(Write(writer=1, role=Role.ROBOT, counter=0, target=MARKER, change=Change(urgency=0)), ROBOT_KEY), RoleNotAllowed),
+        (sign(Write(writer=1, role=Role.ROBOT, counter=0, target=MARKER, change=Change(status=TagStatus.IDLE)), ROBOT_KEY), IllegalTransition),
+        (sign(Write(writer=1, role=Role.OPERATOR, counter=0, target=MARKER, change=Change(urgency=0)), derive_role_key(b"not-the-site-key", Role.OPERATOR)), ForgedWrite),
+        (sign(Write(writer=1, role=Role.OPERATOR, counter=0, target=MARKER, change=Change(urgency=0)), ROBOT_KEY), ForgedWrite),
     ],
 )  # fmt: skip
 def test_refusals_leave_everything_unchanged(message, error):
@@ -78,12 +82,13 @@ def test_refusals_leave_everything_unchanged(message, error):
 
 def test_replay_and_stale_counter_refused():
     tag, _store = _provision()
-    robot = WriteSigner(writer=1, role=Role.ROBOT, key=KEY, counter=41)
+    robot = WriteSigner(writer=1, role=Role.ROBOT, key=ROBOT_KEY, counter=41)
     lift = robot.sign(MARKER, Change(status=TagStatus.PICKED_UP))
     tag.apply(lift)
     with pytest.raises(ReplayedWrite, match="counter 42 from writer 1"):
         tag.apply(lift)
-    forgetful = WriteSigner(writer=1, role=Role.ROBOT, key=KEY)  # restarted without its counter
+    # restarted without its counter:
+    forgetful = WriteSigner(writer=1, role=Role.ROBOT, key=ROBOT_KEY)
     with pytest.raises(ReplayedWrite):
         tag.apply(forgetful.sign(MARKER, Change(status=TagStatus.IDLE)))
     assert tag.state.status is TagStatus.PICKED_UP
@@ -92,17 +97,17 @@ def test_replay_and_stale_counter_refused():
 def test_counters_are_per_writer():
     tag, _store = _provision(TagStatus.IDLE)
     for writer in (5, 6):
-        operator = WriteSigner(writer=writer, role=Role.OPERATOR, key=KEY, counter=9)
+        operator = WriteSigner(writer=writer, role=Role.OPERATOR, key=OPERATOR_KEY, counter=9)
         tag.apply(operator.sign(MARKER, Change(urgency=writer)))
     assert dict(tag.counters) == {5: 10, 6: 10}
 
 
 def test_counter_survives_power_cycle_so_replay_stays_refused():
     tag, store = _provision()
-    robot = WriteSigner(writer=3, role=Role.ROBOT, key=KEY)
+    robot = WriteSigner(writer=3, role=Role.ROBOT, key=ROBOT_KEY)
     lift = robot.sign(MARKER, Change(status=TagStatus.PICKED_UP))
     tag.apply(lift)
-    operator = WriteSigner(writer=200, role=Role.OPERATOR, key=KEY)
+    operator = WriteSigner(writer=200, role=Role.OPERATOR, key=OPERATOR_KEY)
     tag.apply(operator.sign(MARKER, Change(status=TagStatus.AWAITING_PICKUP)))
     rebooted = TagModel.boot(site_key=KEY, store=store)
     with pytest.raises(ReplayedWrite):
@@ -126,7 +131,7 @@ def test_a_failed_persist_changes_nothing():
     start = TagState(urgency=5, status=TagStatus.AWAITING_PICKUP, destination=0, marker=MARKER)
     tag = TagModel.provision(start, site_key=KEY, store=store)
     store.fail = True
-    robot = WriteSigner(writer=1, role=Role.ROBOT, key=KEY)
+    robot = WriteSigner(writer=1, role=Role.ROBOT, key=ROBOT_KEY)
     with pytest.raises(OSError, match="flash"):
         tag.apply(robot.sign(MARKER, Change(status=TagStatus.PICKED_UP)))
     assert (tag.state, dict(tag.counters)) == (start, {})
@@ -155,8 +160,8 @@ class TagLifecycle(RuleBasedStateMachine):
         )
         self.tag = TagModel.provision(self.expected, site_key=KEY, store=self.store)
         self.counters: dict[int, int] = {}
-        self.robots = [WriteSigner(writer=w, role=Role.ROBOT, key=KEY) for w in (1, 2)]
-        self.operator = WriteSigner(writer=100, role=Role.OPERATOR, key=KEY)
+        self.robots = [WriteSigner(writer=w, role=Role.ROBOT, key=ROBOT_KEY) for w in (1, 2)]
+        self.operator = WriteSigner(writer=100, role=Role.OPERATOR, key=OPERATOR_KEY)
         self.seen: set[bytes] = set()
 
     def _refused(self, message: bytes, error: type[WriteRejected]) -> None:
@@ -218,9 +223,14 @@ class TagLifecycle(RuleBasedStateMachine):
     @rule(change=changes)
     def wrong_key(self, change):
         intruder = WriteSigner(
-            writer=100, role=Role.OPERATOR, key=b"guessed-site-key", counter=10**6
+            writer=100, role=Role.OPERATOR, key=b"guessed-operator-key-0123456789a", counter=10**6
         )
         self._refused(intruder.sign(MARKER, change), ForgedWrite)
+
+    @rule(writer=st.sampled_from([1, 2, 100]), change=changes)
+    def robot_key_signs_as_operator(self, writer, change):
+        impostor = WriteSigner(writer=writer, role=Role.OPERATOR, key=ROBOT_KEY, counter=10**6)
+        self._refused(impostor.sign(MARKER, change), ForgedWrite)
 
     @rule(change=changes, other=bytes_values.filter(lambda m: m != MARKER))
     def other_tag(self, change, other):

@@ -23,6 +23,7 @@ from swarmtag.tag import (
     TagStatus,
     WriteSigner,
     decode,
+    derive_role_key,
     encode,
     encode_manufacturer_data,
 )
@@ -72,13 +73,16 @@ def _writes(console: Console) -> None:
     store = MemoryStore()
     start = TagState(urgency=9, status=TagStatus.AWAITING_PICKUP, destination=0, marker=5)
     tag = TagModel.provision(start, site_key=_SITE_KEY, store=store)
-    robot = WriteSigner(writer=1, role=Role.ROBOT, key=_SITE_KEY)
-    intruder = WriteSigner(writer=900, role=Role.OPERATOR, key=b"guessed-key-0000")
+    robot_key = derive_role_key(_SITE_KEY, Role.ROBOT)  # a robot holds only its role's key
+    robot = WriteSigner(writer=1, role=Role.ROBOT, key=robot_key)
+    stolen = WriteSigner(writer=1, role=Role.OPERATOR, key=robot_key)
+    intruder = WriteSigner(writer=900, role=Role.OPERATOR, key=b"a phone's guessed operator key!!")
     lift = robot.sign(5, Change(status=TagStatus.PICKED_UP))
     steps = (
         ("robot lifts the carrier", lift),
         ("the same bytes replayed", lift),
         ("robot tries to set urgency 0", robot.sign(5, Change(urgency=0))),
+        ("robot key signs as an operator", stolen.sign(5, Change(urgency=0))),
         ("phone with a guessed key sets IDLE", intruder.sign(5, Change(status=TagStatus.IDLE))),
         ("robot releases in the drop-off area", robot.sign(5, Change(status=TagStatus.IDLE))),
     )

@@ -1,12 +1,14 @@
-"""``swarmtag tag encode|decode``: the advertisement payload from the shell (SPEC §8.2)."""
+"""``swarmtag tag encode|decode|render``: the payload and the E-ink picture (SPEC §8.2)."""
 
 from __future__ import annotations
 
 import json
 import string
+from pathlib import Path
 
 import click
 
+from swarmtag._outputs import OutputPlan
 from swarmtag.errors import FieldRangeError, PayloadError
 from swarmtag.tag import COMPANY_ID, TagState, TagStatus, decode, encode
 
@@ -33,7 +35,7 @@ def parse_hex(text: str) -> bytes:
 
 @click.group()
 def tag() -> None:
-    """Encode and decode the 6-byte tag advertisement payload."""
+    """Encode and decode the 6-byte tag advertisement payload; draw the E-ink picture."""
 
 
 @tag.command("encode")
@@ -75,3 +77,40 @@ def decode_cmd(hex_payload: str, *, as_json: bool) -> None:
     for name, value in fields.items():
         shown = f"0x{value:04x}" if name == "company_id" else value
         click.echo(f"{name:<{width}}  {shown}")
+
+
+@tag.command("render")
+@click.option("--urgency", required=True, type=click.IntRange(0, 9), help="Urgency 0-9.")
+@click.option(
+    "--status",
+    required=True,
+    metavar="STATUS",
+    callback=_status,
+    help="idle, awaiting_pickup or picked_up (any case), or 0-2.",
+)
+@click.option(
+    "--destination", required=True, type=click.IntRange(0, 255), help="Destination 0-255."
+)
+@click.option("--marker", required=True, type=click.IntRange(0, 255), help="ArUco marker id 0-255.")
+@click.option(
+    "--out",
+    required=True,
+    type=click.Path(path_type=Path),
+    metavar="PNG",
+    help="The .png file to write (its folder must exist).",
+)
+def render_cmd(urgency: int, status: TagStatus, destination: int, marker: int, out: Path) -> None:
+    """Write the tag's E-ink picture (250 x 122, 1-bit PNG) for the given state."""
+    from swarmtag.tag.eink import save_png  # noqa: PLC0415 - Pillow, the eink extra
+
+    state = TagState(urgency=urgency, status=status, destination=destination, marker=marker)
+    plan = OutputPlan()
+    target = plan.file("--out", out, suffixes=(".png",))
+    with plan.writing() as stage:
+        save_png(state, stage.path(target))
+    click.echo(f"wrote E-ink picture: {out}")
+
+
+from swarmtag.cli.tag_keys import keygen_cmd  # noqa: E402 - a command of this group, in its module
+
+tag.add_command(keygen_cmd)

@@ -23,6 +23,7 @@ from swarmtag.sim.events import EventKind, TickEvents
 from swarmtag.sim.groups import Reprioritisation
 from swarmtag.sim.state import WorldState
 from swarmtag.tag import Change, MemoryStore, Role, TagModel, TagState, TagStatus, WriteSigner
+from swarmtag.tag.keys import derive_role_key
 
 __all__ = ["OPERATOR_ID", "SIM_SITE_KEY", "operator_writes"]
 
@@ -44,7 +45,7 @@ def operator_writes(
         signer = WriteSigner(
             writer=OPERATOR_ID,
             role=Role.OPERATOR,
-            key=SIM_SITE_KEY,
+            key=derive_role_key(SIM_SITE_KEY, Role.OPERATOR),
             counter=int(s.operator_counter[run]),
         )
         for event in writes:

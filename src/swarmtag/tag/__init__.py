@@ -1,4 +1,4 @@
-"""The smart tag: advertisement codec, lifecycle, authenticated writes, persistence.
+"""The smart tag: advertisement codec, lifecycle, authenticated writes, keys, persistence.
 
 Everything here is pure (no radio, no clock); transports that move these
 bytes over real BLE live in adapters built on top.
@@ -19,6 +19,7 @@ from swarmtag.tag.codec import (
 )
 from swarmtag.tag.filestore import FileStore
 from swarmtag.tag.gatt import ATT_ERRORS, SERVICE_UUID, STATE_CHAR_UUID, WRITE_CHAR_UUID
+from swarmtag.tag.keys import derive_role_key, generate_site_key, read_key_file, write_key_file
 from swarmtag.tag.lifecycle import ROBOT_TRANSITIONS, Change, Role, apply_change
 from swarmtag.tag.model import MemoryStore, TagModel, TagStore
 from swarmtag.tag.record import MAX_WRITERS, TagRecord
@@ -63,8 +64,12 @@ __all__ = [
     "apply_change",
     "decode",
     "decode_manufacturer_data",
+    "derive_role_key",
     "encode",
     "encode_manufacturer_data",
+    "generate_site_key",
+    "read_key_file",
     "sign",
     "verify",
+    "write_key_file",
 ]

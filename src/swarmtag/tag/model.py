@@ -1,7 +1,8 @@
 """The tag's logic: apply an authenticated write or refuse it, leaving nothing changed.
 
 ``TagModel`` is what runs on the nRF board (and in the software tag and the
-simulator): it verifies the MAC, the target, the writer's counter and the
+simulator): it verifies the MAC (under the key of the role the write names,
+derived from the site key it holds), the target, the writer's counter and the
 role's rights and that its writer table has room, persists the new record
 *before* acting on it (so a power loss can never make a used counter usable
 again), and only then changes.
@@ -69,13 +70,13 @@ class TagModel:
     Create one with ``provision`` (factory setup) or ``boot`` (power-on from
     the persisted record).
 
-    >>> from swarmtag.tag import Change, Role, TagStatus, WriteSigner
+    >>> from swarmtag.tag import Change, Role, TagStatus, WriteSigner, derive_role_key
     >>> key = bytes(range(16))
     >>> store = MemoryStore()
     >>> tag = TagModel.provision(
     ...     TagState(urgency=5, status=TagStatus.AWAITING_PICKUP, destination=0, marker=12),
     ...     site_key=key, store=store)
-    >>> robot = WriteSigner(writer=3, role=Role.ROBOT, key=key)
+    >>> robot = WriteSigner(writer=3, role=Role.ROBOT, key=derive_role_key(key, Role.ROBOT))
     >>> tag.apply(robot.sign(12, Change(status=TagStatus.PICKED_UP))).status.name
     'PICKED_UP'
     >>> TagModel.boot(site_key=key, store=store).counters  # after a power cycle

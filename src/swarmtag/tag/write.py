@@ -12,11 +12,15 @@ Layout (multi-byte integers little-endian, as everywhere in BLE)::
     byte  9      new urgency (0 when absent)
     byte  10     new status (0 when absent)
     byte  11     new destination (0 when absent)
-    bytes 12-19  MAC: HMAC-SHA256(site key, bytes 0-11) truncated to 8 bytes
+    bytes 12-19  MAC: HMAC-SHA256(role key, bytes 0-11) truncated to 8 bytes
 
-The MAC is checked before any other field is interpreted, so a forger learns
-nothing from which error comes back. Arguments of the wrong type or range
-raise ``FieldRangeError`` (``MalformedWrite`` for a message that is not bytes).
+The role key is ``derive_role_key(site_key, role)`` of the role in byte 1
+(``swarmtag.tag.keys``): writers hold only their role's key, tags hold the
+site key and derive the role key of each write. The MAC is checked before any
+other field is interpreted, so a forger learns nothing from which error comes
+back; role bits that name no role (0 or 3) select no key, so such a write
+never verifies. Arguments of the wrong type or range raise ``FieldRangeError``
+(``MalformedWrite`` for a message that is not bytes).
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from typing import Final
 from swarmtag.errors import FieldRangeError, ForgedWrite, MalformedWrite
 from swarmtag.tag._arguments import as_bytes, check_int, check_type
 from swarmtag.tag.codec import MAX_URGENCY
+from swarmtag.tag.keys import MIN_KEY_LENGTH, check_role_key, check_site_key, derive_role_key
 from swarmtag.tag.lifecycle import Change, Role, check_role
 from swarmtag.tag.status import TagStatus
 
@@ -48,8 +53,6 @@ WRITE_LENGTH: Final = 20
 """One ATT write at the default MTU (23) carries 20 bytes of value."""
 WRITE_VERSION: Final = 0x01
 MAC_LENGTH: Final = 8
-MIN_KEY_LENGTH: Final = 16
-"""Site keys shorter than 128 bits are refused."""
 MAX_COUNTER: Final = 0xFFFF_FFFF
 
 _SIGNED: Final = WRITE_LENGTH - MAC_LENGTH
@@ -58,14 +61,7 @@ _URGENCY_BIT: Final = 0x10
 _STATUS_BIT: Final = 0x20
 _DESTINATION_BIT: Final = 0x40
 _KNOWN_BITS: Final = _ROLE_BITS | _URGENCY_BIT | _STATUS_BIT | _DESTINATION_BIT
-
-
-def check_site_key(key: bytes | bytearray | memoryview) -> bytes:
-    """Return ``key`` as bytes if it is a usable site key (bytes-like, at least 16 bytes)."""
-    data = as_bytes("site_key", key, FieldRangeError)
-    if len(data) < MIN_KEY_LENGTH:
-        raise FieldRangeError(f"site_key: must be at least {MIN_KEY_LENGTH} bytes, got {len(data)}")
-    return data
+_ROLES: Final = frozenset(int(role) for role in Role)
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,10 +94,14 @@ def _mac(key: bytes, signed: bytes) -> bytes:
 
 
 def sign(write: Write, key: bytes) -> bytes:
-    """The 20 bytes to send for ``write`` under the site ``key``.
+    """The 20 bytes to send for ``write``, signed with ``key``, the key of ``write.role``.
 
+    ``key`` is ``derive_role_key(site_key, write.role)``; under any other key
+    (the site key itself, another role's key) the tag refuses the write as forged.
+
+    >>> key = derive_role_key(b"k" * 16, Role.ROBOT)
     >>> msg = sign(Write(writer=7, role=Role.ROBOT, counter=1, target=12,
-    ...                  change=Change(status=TagStatus.PICKED_UP)), b"k" * 16)
+    ...                  change=Change(status=TagStatus.PICKED_UP)), key)
     >>> len(msg), msg[:12].hex()
     (20, '01210700010000000c000200')
     """
@@ -123,28 +123,33 @@ def sign(write: Write, key: bytes) -> bytes:
             )
         )
     )
-    return signed + _mac(check_site_key(key), signed)
+    return signed + _mac(check_role_key(key), signed)
 
 
 def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
-    """Check the MAC, then parse; raise ``ForgedWrite`` or ``MalformedWrite`` if not valid."""
+    """Check the MAC under the named role's key, then parse; raise a ``WriteRejected`` if bad.
+
+    ``key`` is the site key (what a tag holds). Only the role bits of byte 1
+    are read before the MAC has verified, to pick the role key; a write whose
+    MAC fails, or whose role bits name no role, is ``ForgedWrite``. After
+    that, ``MalformedWrite`` for a bad version, reserved bits or field.
+    """
     data = as_bytes("message", message, MalformedWrite)
     if len(data) != WRITE_LENGTH:
         raise MalformedWrite(f"a write is {WRITE_LENGTH} bytes, got {len(data)}")
     signed, tag = data[:_SIGNED], data[_SIGNED:]
-    if not hmac.compare_digest(_mac(check_site_key(key), signed), tag):
-        raise ForgedWrite("the write's MAC does not verify under the site key")
+    site_key = check_site_key(key)
+    role_bits = signed[1] & _ROLE_BITS
+    if role_bits not in _ROLES or not hmac.compare_digest(
+        _mac(derive_role_key(site_key, Role(role_bits)), signed), tag
+    ):
+        raise ForgedWrite("the write's MAC does not verify under the key of the role it names")
     version, flags = signed[0], signed[1]
     if version != WRITE_VERSION:
         raise MalformedWrite(f"write format version {version} is not supported (expected 1)")
     if flags & ~_KNOWN_BITS:
         raise MalformedWrite(f"flags byte 0x{flags:02x} sets reserved bits")
-    try:
-        role = Role(flags & _ROLE_BITS)
-    except ValueError:
-        raise MalformedWrite(
-            f"role {flags & _ROLE_BITS} is not 1 (robot) or 2 (operator)"
-        ) from None
+    role = Role(role_bits)
     urgency, status, destination = signed[9], signed[10], signed[11]
     for bit, name, value in (
         (_URGENCY_BIT, "urgency", urgency),
@@ -179,12 +184,14 @@ def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
 
 @dataclass
 class WriteSigner:
-    """A writer's side: signs changes with its id, role and an increasing counter.
+    """A writer's side: signs changes with its id, role, role key and an increasing counter.
 
-    ``counter`` is the last counter used (-1: none yet); persist it across
-    restarts (the tags refuse any counter they have already seen from this
-    writer). Every argument is checked here, so a bad one fails at set-up,
-    not at the first write.
+    ``key`` is the writer's role key, ``derive_role_key(site_key, role)``: a
+    writer never needs the site key, and a robot's key cannot sign an
+    operator's write. ``counter`` is the last counter used (-1: none yet);
+    persist it across restarts (the tags refuse any counter they have already
+    seen from this writer). Every argument is checked here, so a bad one fails
+    at set-up, not at the first write.
     """
 
     writer: int
@@ -195,7 +202,7 @@ class WriteSigner:
     def __post_init__(self) -> None:
         check_int("writer", self.writer, 0xFFFF)
         self.role = check_role(self.role)
-        self.key = check_site_key(self.key)
+        self.key = check_role_key(self.key)
         check_int("counter", self.counter, MAX_COUNTER, low=-1)
 
     def sign(self, target: int, change: Change) -> bytes:
