@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import string
+from collections.abc import Callable
 from pathlib import Path
 
 import click
@@ -33,24 +34,36 @@ def parse_hex(text: str) -> bytes:
     return bytes.fromhex(digits)
 
 
+def _state_options(command: Callable[..., None]) -> Callable[..., None]:
+    """The four fields of a tag state as required options (encode, render)."""
+    options = (
+        click.option("--urgency", required=True, type=click.IntRange(0, 9), help="Urgency 0-9."),
+        click.option(
+            "--status",
+            required=True,
+            metavar="STATUS",
+            callback=_status,
+            help="idle, awaiting_pickup or picked_up (any case), or 0-2.",
+        ),
+        click.option(
+            "--destination", required=True, type=click.IntRange(0, 255), help="Destination 0-255."
+        ),
+        click.option(
+            "--marker", required=True, type=click.IntRange(0, 255), help="ArUco marker id 0-255."
+        ),
+    )
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
 @click.group()
 def tag() -> None:
-    """Encode and decode the 6-byte tag advertisement payload; draw the E-ink picture."""
+    """The smart tag: its 6-byte payload, its E-ink picture, site key files."""
 
 
 @tag.command("encode")
-@click.option("--urgency", required=True, type=click.IntRange(0, 9), help="Urgency 0-9.")
-@click.option(
-    "--status",
-    required=True,
-    metavar="STATUS",
-    callback=_status,
-    help="idle, awaiting_pickup or picked_up (any case), or 0-2.",
-)
-@click.option(
-    "--destination", required=True, type=click.IntRange(0, 255), help="Destination 0-255."
-)
-@click.option("--marker", required=True, type=click.IntRange(0, 255), help="ArUco marker id 0-255.")
+@_state_options
 def encode_cmd(urgency: int, status: TagStatus, destination: int, marker: int) -> None:
     """Print the payload as lowercase hex, e.g. ffff0701030c."""
     state = TagState(urgency=urgency, status=status, destination=destination, marker=marker)
@@ -80,18 +93,7 @@ def decode_cmd(hex_payload: str, *, as_json: bool) -> None:
 
 
 @tag.command("render")
-@click.option("--urgency", required=True, type=click.IntRange(0, 9), help="Urgency 0-9.")
-@click.option(
-    "--status",
-    required=True,
-    metavar="STATUS",
-    callback=_status,
-    help="idle, awaiting_pickup or picked_up (any case), or 0-2.",
-)
-@click.option(
-    "--destination", required=True, type=click.IntRange(0, 255), help="Destination 0-255."
-)
-@click.option("--marker", required=True, type=click.IntRange(0, 255), help="ArUco marker id 0-255.")
+@_state_options
 @click.option(
     "--out",
     required=True,
