@@ -1,4 +1,4 @@
-"""Shared test configuration: Hypothesis profiles, and a folder nobody may write in."""
+"""Shared test configuration: Hypothesis profiles, the opt-in ``--radio`` tests, a locked folder."""
 
 from __future__ import annotations
 
@@ -19,6 +19,24 @@ settings.register_profile(
 )
 settings.register_profile("dev", deadline=None, max_examples=100)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci" if os.environ.get("CI") else "dev"))
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--radio",
+        action="store_true",
+        default=False,
+        help="also run the tests marked 'radio', which scan with a real Bluetooth adapter",
+    )
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if config.getoption("--radio"):
+        return
+    skip = pytest.mark.skip(reason="needs a Bluetooth adapter: run with --radio")
+    for item in items:
+        if "radio" in item.keywords:
+            item.add_marker(skip)
 
 
 @pytest.fixture

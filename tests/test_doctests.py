@@ -10,11 +10,15 @@ import pytest
 
 import swarmtag
 
+OPTIONAL = {"swarmtag.tag.backends.bleak": "bleak"}
+"""Modules that need an extra: skipped (not failed) where it is not installed."""
 MODULES = sorted(info.name for info in pkgutil.walk_packages(swarmtag.__path__, prefix="swarmtag."))
 
 
 @pytest.mark.parametrize("name", MODULES)
 def test_module_doctests(name):
+    if name in OPTIONAL:
+        pytest.importorskip(OPTIONAL[name])
     module = importlib.import_module(name)
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     assert result.failed == 0, f"{result.failed} doctest(s) failed in {name}"

@@ -9,6 +9,7 @@ import pytest
 PACKAGES = [
     "swarmtag",
     "swarmtag.tag",
+    "swarmtag.tag.backends",
     "swarmtag.policy",
     "swarmtag.errors",
     "swarmtag.cli",

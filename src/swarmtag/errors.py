@@ -26,7 +26,8 @@ what to do instead.
     ├── PolicyError (ValueError)            bad policy parameter, condition name or inputs
     ├── EventLogError (ValueError)          an event log breaks the schema (names file, row, column)
     ├── StatisticsError (ValueError)        statistics input refused (no runs, unknown baseline)
-    ├── ConfigError (ValueError)            a simulation scenario value or key is not allowed
+    ├── ConfigError (ValueError)            a scenario or backend value or key is not allowed
+    ├── RadioError (RuntimeError)           the BLE radio cannot be used (adapter, BlueZ, rights)
     ├── SimulationError (RuntimeError)      a simulation broke one of its own contracts
     │   ├── InvariantError                  a world-state invariant failed (checking mode)
     │   └── DeterminismError                a run differed between two ways of computing it
@@ -57,6 +58,7 @@ __all__ = [
     "PayloadError",
     "PayloadLengthError",
     "PolicyError",
+    "RadioError",
     "ReplayedWrite",
     "ResourceError",
     "RoleNotAllowed",
@@ -182,7 +184,14 @@ class StatisticsError(SwarmtagError, ValueError):
 
 
 class ConfigError(SwarmtagError, ValueError):
-    """A simulation scenario has a bad value or an unknown key; the message names the field."""
+    """A scenario or a tag backend has a bad value or an unknown key; the message names it."""
+
+
+class RadioError(SwarmtagError, RuntimeError):
+    """The BLE radio cannot be used: no adapter, no BlueZ, no permission, or failures past retry.
+
+    The message says what is missing and how to get it.
+    """
 
 
 class SimulationError(SwarmtagError, RuntimeError):

@@ -336,6 +336,19 @@ HEX = texts(
      "ffff0701030", "zz", "0x"],
 )  # fmt: skip
 
+SCAN_TIMEOUT = Values(
+    st.floats(0.0, 0.3).map(repr),
+    st.one_of(st.sampled_from(["-1", "-0.01", "nan", "inf", "1e9", "86401"]), junk),
+)
+"""``tag scan --timeout``: short scans only (the sim radio), else refused values."""
+SCAN_BACKEND = Values(
+    st.just("sim"),
+    st.one_of(st.sampled_from(["BLEAK", "Sim", "fake", "nope"]), junk).filter(
+        lambda word: word != "bleak"  # the real radio: never opened by the fuzzer
+    ),
+)
+"""``tag scan --backend`` (hidden): the simulated radio, or refused names."""
+
 COMMON: dict[str, Values] = {
     "conditions": CONDITIONS,
     "settings": set_items(),
@@ -386,6 +399,7 @@ BY_COMMAND: dict[tuple[str, ...], dict[str, Values]] = {
     ("robot", "tree"): {"folder": folder_output()},
     ("tag", "render"): {"out": file_output(".png")},
     ("tag", "keygen"): {"out": file_output(".key")},
+    ("tag", "scan"): {"timeout": SCAN_TIMEOUT, "backend": SCAN_BACKEND},
     ("calibrate",): {
         "baseline": BASELINE,
         "out": with_inputs(file_output(".toml")),

@@ -74,6 +74,7 @@ from tests.cli.fuzz_values import (
     CHEAP,
     INPUTS,
     OUTPUTS,
+    SCAN_TIMEOUT,
     SHIPPED_STUDIES,
     UNGUARDED_BASELINES,
     Values,
@@ -98,8 +99,9 @@ NORMAL_EXAMPLES = {
     ("robot", "tree"): 40,
     ("tag", "render"): 60,
     ("tag", "keygen"): 40,
+    ("tag", "scan"): 30,
 }
-"""Invocations per command in the normal suite (2,148 in all)."""
+"""Invocations per command in the normal suite (2,178 in all)."""
 TOTAL = int(os.environ.get("SWARMTAG_FUZZ_EXAMPLES", "0")) or sum(NORMAL_EXAMPLES.values())
 """Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``."""
 HANG_SECONDS = 60
@@ -241,6 +243,11 @@ def cheap(draw: st.DrawFn, path: tuple[str, ...], call: Invocation) -> Invocatio
             flag = call.given.get(key) if key == "ticks" else None
             if not flag and not any(text.startswith(f"{key}=") for text in settings_):
                 call.argv += ["--set", f"{key}={draw(CHEAP[key])}"]
+    if path == ("tag", "scan"):  # never a real radio, never the default 10 s
+        if not call.given.get("backend"):
+            call.argv += ["--backend", "sim"]
+        if not call.given.get("timeout"):
+            call.argv += ["--timeout", draw(SCAN_TIMEOUT.good)]
     if path == ("reproduce",) and draw(st.booleans()):
         call.made.append(Made("out", "dir"))  # so that the default --out out/reproduction works
     if path in (("simulate",), ("metrics",)) and not call.given.get("resamples"):

@@ -1,4 +1,4 @@
-"""``swarmtag tag encode|decode|render``: the payload and the E-ink picture (SPEC §8.2)."""
+"""``swarmtag tag encode|decode|render`` (the payload, the E-ink picture); keygen and scan join."""
 
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ def _state_options(command: Callable[..., None]) -> Callable[..., None]:
 
 @click.group()
 def tag() -> None:
-    """The smart tag: its 6-byte payload, its E-ink picture, site key files."""
+    """The smart tag: its 6-byte payload, its E-ink picture, site key files, scanning."""
 
 
 @tag.command("encode")
@@ -114,5 +114,7 @@ def render_cmd(urgency: int, status: TagStatus, destination: int, marker: int, o
 
 
 from swarmtag.cli.tag_keys import keygen_cmd  # noqa: E402 - a command of this group, in its module
+from swarmtag.cli.tag_scan import scan_cmd  # noqa: E402 - a command of this group, in its module
 
 tag.add_command(keygen_cmd)
+tag.add_command(scan_cmd)
