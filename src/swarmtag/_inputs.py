@@ -13,7 +13,19 @@ from pathlib import Path
 
 from swarmtag.errors import SwarmtagError
 
-__all__ = ["check_path", "is_regular_file", "regular_file"]
+__all__ = ["as_path", "check_path", "is_regular_file", "regular_file"]
+
+
+def as_path(path: object, *, what: str, error: type[SwarmtagError]) -> Path:
+    """``path`` as a ``Path`` if it can name a file at all (a str or path, not empty, no NUL)."""
+    text = os.fspath(path) if isinstance(path, str | os.PathLike) else path
+    if not isinstance(text, str):
+        msg = f"{what}: expected a str or os.PathLike path, got {type(path).__name__}"
+        raise error(msg)
+    if not text or "\0" in text:
+        msg = f"{what} {text!r} is empty or holds a NUL character"
+        raise error(msg)
+    return Path(text)
 
 
 def is_regular_file(path: str | os.PathLike[str]) -> bool:

@@ -25,7 +25,7 @@ from swarmtag.sim import (
     initial_state,
 )
 from swarmtag.sim.decide import decide
-from swarmtag.sim.sense import sense
+from swarmtag.sim.sense import sense, sensed_state
 from swarmtag.tag import TagStatus
 from tests.sim.helpers import params_for
 
@@ -44,15 +44,7 @@ def _decide(before, params, inputs=None, t=T):
     before = replace(before, tick=t - 1)
     inputs = inputs if inputs is not None else TickInputs.fixed(1, params.robots)
     senses = sense(before, inputs, params)
-    s = replace(
-        before.copy(),
-        tick=t,
-        known_status=senses.known_status,
-        known_urgency=senses.known_urgency,
-        heard_tick=senses.heard_tick,
-        seen_tick=senses.seen_tick,
-        seen_pos=senses.seen_pos,
-    )
+    s = sensed_state(before, senses)
     events = TickEvents()
     decide(before, s, senses=senses, inputs=inputs, params=params, t=t, events=events)
     return s, events

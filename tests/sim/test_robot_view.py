@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
@@ -11,7 +9,7 @@ from swarmtag.policy import Urgency
 from swarmtag.robot import ControlStep, Report
 from swarmtag.sim import Mode, RandomSource, Scenario, make_params, seeded_state
 from swarmtag.sim.robot_view import SimRobotIO, StepContext
-from swarmtag.sim.sense import sense
+from swarmtag.sim.sense import sense, sensed_state
 
 
 @pytest.fixture
@@ -26,13 +24,7 @@ def setting():
 def _context(setting, step=ControlStep.SENSED, **extra):
     """The context of a control step of tick 1, as the kernel builds it."""
     params, before, senses, inputs = setting
-    s = replace(
-        before.copy(),
-        tick=1,
-        known_status=senses.known_status,
-        known_urgency=senses.known_urgency,
-        heard_tick=senses.heard_tick,
-    )
+    s = sensed_state(before, senses)
     return StepContext(step, 1, before, s, params, senses, inputs, **extra)
 
 

@@ -28,7 +28,7 @@ from swarmtag.sim.events import TickEvents
 from swarmtag.sim.motion import move, resolve
 from swarmtag.sim.params import Params
 from swarmtag.sim.randomness import TickInputs
-from swarmtag.sim.sense import sense
+from swarmtag.sim.sense import sense, sensed_state
 from swarmtag.sim.state import WorldState
 from swarmtag.sim.urgency import growing_urgency
 from swarmtag.sim.wms import operator_writes
@@ -71,15 +71,7 @@ def step(
     """The state after one more tick, and what happened in it (``controller`` decides)."""
     t = state.tick + 1
     senses = sense(state, inputs, params)
-    s = replace(
-        state.copy(),
-        tick=t,
-        known_status=senses.known_status,
-        known_urgency=senses.known_urgency,
-        heard_tick=senses.heard_tick,
-        seen_tick=senses.seen_tick,
-        seen_pos=senses.seen_pos,
-    )
+    s = sensed_state(state, senses)
     events = TickEvents()
     break_down(s, inputs, events)
     controller.decide(state, s, senses=senses, inputs=inputs, params=params, t=t, events=events)

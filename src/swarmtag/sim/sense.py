@@ -26,7 +26,7 @@ The distance used for selection is from the robot to the known position.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,7 +37,15 @@ from swarmtag.sim.randomness import TickInputs
 from swarmtag.sim.state import Int, Mode, WorldState
 from swarmtag.tag import TagStatus
 
-__all__ = ["Senses", "actionable", "advertised", "advertising", "line_of_sight", "sense"]
+__all__ = [
+    "Senses",
+    "actionable",
+    "advertised",
+    "advertising",
+    "line_of_sight",
+    "sense",
+    "sensed_state",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,4 +174,17 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         heard_tick=heard_tick,
         seen_tick=seen_tick,
         seen_pos=seen_pos,
+    )
+
+
+def sensed_state(state: WorldState, senses: Senses) -> WorldState:
+    """A copy of ``state`` as tick ``state.tick + 1`` begins, with the caches of ``senses``."""
+    return replace(
+        state.copy(),
+        tick=state.tick + 1,
+        known_status=senses.known_status,
+        known_urgency=senses.known_urgency,
+        heard_tick=senses.heard_tick,
+        seen_tick=senses.seen_tick,
+        seen_pos=senses.seen_pos,
     )

@@ -14,6 +14,7 @@ import re
 from pathlib import Path
 
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._inputs import as_path
 from swarmtag.errors import StateRecordError
 from swarmtag.tag._arguments import as_bytes
 
@@ -25,14 +26,7 @@ _TEMP_NAME = r"\.{name}\.[0-9a-f]{{12}}\.tmp"
 
 def _check_path(path: object) -> Path:
     """``path`` as a ``Path`` if it can name a record file; else ``StateRecordError``."""
-    text = os.fspath(path) if isinstance(path, str | os.PathLike) else path
-    if not isinstance(text, str):
-        raise StateRecordError(
-            f"FileStore path: expected a str or os.PathLike path, got {type(path).__name__}"
-        )
-    if not text or "\0" in text:
-        raise StateRecordError(f"FileStore path {text!r} is empty or holds a NUL character")
-    target = Path(text)
+    target = as_path(path, what="FileStore path", error=StateRecordError)
     try:
         if target.is_dir():
             raise StateRecordError(

@@ -38,6 +38,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Final
 
+from swarmtag._atomic import fsync_folder
+from swarmtag._inputs import as_path
 from swarmtag.errors import FieldRangeError, KeyFileError
 from swarmtag.tag._arguments import as_bytes, check_int
 from swarmtag.tag.lifecycle import Role, check_role
@@ -140,17 +142,6 @@ def generate_site_key() -> bytes:
     return secrets.token_bytes(SITE_KEY_LENGTH)
 
 
-def _check_path(path: object) -> Path:
-    text = os.fspath(path) if isinstance(path, str | os.PathLike) else path
-    if not isinstance(text, str):
-        raise KeyFileError(
-            f"key file path: expected a str or os.PathLike, got {type(path).__name__}"
-        )
-    if not text or "\0" in text:
-        raise KeyFileError("key file path is empty or holds a NUL character")
-    return Path(text)
-
-
 def _failed(target: Path, doing: str, error: OSError) -> KeyFileError:
     return KeyFileError(f"cannot {doing} key file {target}: {error.strerror or error}")
 
@@ -162,7 +153,7 @@ def write_key_file(path: str | os.PathLike[str], key: bytes) -> Path:
     folder. The file appears complete or not at all (temporary file, fsync,
     hard link into place, which fails if the name was taken meanwhile).
     """
-    target = _check_path(path)
+    target = as_path(path, what="key file path", error=KeyFileError)
     data = as_bytes("key", key, FieldRangeError)
     if len(data) != SITE_KEY_LENGTH:
         raise FieldRangeError(
@@ -186,7 +177,7 @@ def write_key_file(path: str | os.PathLike[str], key: bytes) -> Path:
     finally:
         with contextlib.suppress(OSError):  # never created (e.g. a name too long)
             temp.unlink()
-    _sync_folder(target.parent)
+    fsync_folder(target.parent)
     return target
 
 
@@ -204,23 +195,13 @@ def _write_private(path: Path, text: bytes) -> None:
         os.close(fd)
 
 
-def _sync_folder(folder: Path) -> None:
-    """Flush the folder entry, so the new file's name survives a power loss (POSIX only)."""
-    if hasattr(os, "O_DIRECTORY"):
-        fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-
-
 def read_key_file(path: str | os.PathLike[str]) -> bytes:
     """The site key in the key file ``path``; ``KeyFileError`` if it is missing, shared or bad.
 
     On POSIX systems the file must give group and others no access at all
     (``chmod 600``): a key others can read is no longer a secret.
     """
-    target = _check_path(path)
+    target = as_path(path, what="key file path", error=KeyFileError)
     try:
         fd = os.open(target, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))  # a FIFO cannot hang us
     except FileNotFoundError:
