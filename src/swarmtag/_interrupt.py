@@ -4,7 +4,10 @@ Python raises ``KeyboardInterrupt`` at whatever bytecode runs when SIGINT
 arrives; if that is Python code called from inside a C extension that
 clears errors (numpy clears exceptions raised while it probes an object's
 type for array protocols, such as an ``IntEnum`` member's metaclass
-``__getattr__``), the interrupt is silently lost. The command line installs
+``__getattr__``), the interrupt is silently lost; if it is a finalizer or a
+weakref callback (run during garbage collection), Python prints it as
+"Exception ignored in ..." and carries on. ``install()`` also quiets those
+(the flag keeps the interrupt). The command line installs
 ``install()``; long loops (simulation ticks, bootstrap chunks, study chunks)
 call ``checkpoint()``, which re-raises a lost interrupt at the next step.
 Without ``install()`` (library use) ``checkpoint()`` does nothing.
@@ -13,6 +16,7 @@ Without ``install()`` (library use) ``checkpoint()`` does nothing.
 from __future__ import annotations
 
 import signal
+import sys
 
 # Only signal at run time: ``swarmtag.cli.main`` imports this module first thing, and until
 # ``install()`` has run a Ctrl-C ends in a traceback.
@@ -34,16 +38,28 @@ def _handler(_signum: int, _frame: FrameType | None) -> None:
 def install() -> Callable[[], None]:
     """Route SIGINT through the flagging handler; returns a function that restores the old one.
 
-    Only the main thread may set signal handlers; elsewhere this does nothing.
+    An interrupt Python cannot raise (it arrived inside a finalizer or a
+    weakref callback) is kept by the flag and not printed: ``checkpoint()``
+    raises it. Only the main thread may set signal handlers; elsewhere this
+    does nothing.
     """
     _state["pending"] = False
     try:
         previous = signal.signal(signal.SIGINT, _handler)
     except ValueError:  # not the main thread
         return lambda: None
+    previous_hook = sys.unraisablehook
+
+    def unraisable(info: sys.UnraisableHookArgs) -> None:
+        if info.exc_type is KeyboardInterrupt and _state["pending"]:
+            return  # ours, swallowed where it arrived: checkpoint() raises it again
+        previous_hook(info)
+
+    sys.unraisablehook = unraisable
 
     def restore() -> None:
         signal.signal(signal.SIGINT, previous)
+        sys.unraisablehook = previous_hook
 
     return restore
 
