@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import signal
@@ -191,4 +192,25 @@ def test_a_staging_folder_whose_removal_never_ran_goes_at_exit(tmp_path):
     )
     assert done.stdout.strip() == "1", done.stderr  # the staging folder existed
     assert "KeyboardInterrupt" in done.stderr
+    assert names(tmp_path) == []
+
+
+def test_outputs_computed_after_a_swallowed_interrupt_are_not_kept(tmp_path):
+    from swarmtag import _interrupt
+
+    plan = OutputPlan()
+    target = plan.file("--out", tmp_path / "a.txt")
+    restore = _interrupt.install()
+    try:
+
+        def work() -> None:
+            with plan.writing() as stage:
+                stage.path(target).write_text("half-computed")
+                with contextlib.suppress(KeyboardInterrupt):  # as a library might
+                    os.kill(os.getpid(), signal.SIGINT)
+
+        with pytest.raises(KeyboardInterrupt):
+            work()
+    finally:
+        restore()
     assert names(tmp_path) == []

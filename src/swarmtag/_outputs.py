@@ -38,7 +38,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
 
-from swarmtag._interrupt import deferred
+from swarmtag._interrupt import checkpoint, deferred
 from swarmtag.errors import OutputError, SwarmtagError
 
 __all__ = ["STAGING_PREFIX", "OutputPlan", "Stage"]
@@ -204,6 +204,7 @@ class OutputPlan:
             if missing:  # a command that planned an output must write it
                 msg = f"not written: {', '.join(missing)}"
                 raise self._error(msg)
+            checkpoint()  # a Ctrl-C some library swallowed: what was computed since is not kept
             _commit(moves)
         finally:
             _remove([*roots.values()])
