@@ -79,3 +79,99 @@ def test_an_interrupt_inside_a_finalizer_is_kept_quietly_for_the_checkpoint():
     assert done.stdout.splitlines() == ["carried on True", "raised at the checkpoint"]
     assert "KeyboardInterrupt" not in done.stderr  # nothing printed for our interrupt
     assert "ValueError: not ours" in done.stderr  # the previous hook still reports the rest
+
+
+_LOST_SCRIPT = """
+import contextlib, os, signal, sys, threading, time
+from swarmtag import _interrupt
+
+restore = _interrupt.install()
+with contextlib.suppress(KeyboardInterrupt):  # swallowed inside a library, no checkpoint near
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(1)
+begin = time.monotonic()
+try:
+    {wait}
+    print("not raised", flush=True)
+except KeyboardInterrupt:
+    print("raised again", round(time.monotonic() - begin, 2), flush=True)
+    _interrupt.acknowledge()
+"""
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="POSIX signals")
+@pytest.mark.parametrize(
+    "wait",
+    ["while time.monotonic() - begin < 5: pass", "threading.Event().wait(5)"],
+    ids=["busy", "blocked"],
+)
+def test_a_lost_interrupt_is_sent_again_by_the_watchdog_even_into_a_blocking_call(wait):
+    script = _LOST_SCRIPT.format(wait=wait)
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=30
+    )
+    word, again, seconds = done.stdout.split()
+    assert (word, again) == ("raised", "again"), done.stdout
+    assert float(seconds) <= 2 * _interrupt.RESEND_S + 0.2
+
+
+_HANDLING_SCRIPT = """
+import os, signal, sys, time
+from swarmtag import _interrupt
+
+restore = _interrupt.install()
+events = []
+try:
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1)
+    except KeyboardInterrupt:
+        time.sleep(1)  # a long clean-up while the interrupt is being handled: not disturbed
+        events.append("cleaned up")
+    _interrupt.acknowledge()  # taken: nothing is sent after this either
+    time.sleep(1)
+    events.append("quiet after")
+except KeyboardInterrupt:
+    events.append("sent again")
+print(" / ".join(events), flush=True)
+"""
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="POSIX signals")
+def test_the_watchdog_leaves_an_interrupt_being_handled_or_taken_alone():
+    done = subprocess.run(
+        [sys.executable, "-c", _HANDLING_SCRIPT],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=30,
+    )
+    assert done.stdout.strip() == "cleaned up / quiet after"
+
+
+_CYTHON_SCRIPT = """
+import ctypes
+from swarmtag import _interrupt
+
+restore = _interrupt.install()
+try:
+    _interrupt._handler(2, None)
+except KeyboardInterrupt:
+    pass
+_interrupt.acknowledge()
+# C code printing an error it cannot raise with PyErr_Print, as Cython's "unraisable" path
+# does with a full traceback (PyRun_SimpleString prints its failure the same way):
+ctypes.pythonapi.PyRun_SimpleString(b"raise KeyboardInterrupt")
+print("carried on", flush=True)
+restore()
+ctypes.pythonapi.PyRun_SimpleString(b"raise ValueError('not ours')")
+"""
+
+
+def test_an_interrupt_printed_as_a_traceback_by_a_c_extension_is_kept_quiet():
+    done = subprocess.run(
+        [sys.executable, "-c", _CYTHON_SCRIPT], capture_output=True, text=True, check=True
+    )
+    assert done.stdout.strip() == "carried on"
+    assert "KeyboardInterrupt" not in done.stderr
+    assert "ValueError: not ours" in done.stderr  # other errors are printed as before

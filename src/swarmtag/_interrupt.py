@@ -6,17 +6,23 @@ clears errors (numpy clears exceptions raised while it probes an object's
 type for array protocols, such as an ``IntEnum`` member's metaclass
 ``__getattr__``), the interrupt is silently lost; if it is a finalizer or a
 weakref callback (run during garbage collection), Python prints it as
-"Exception ignored in ..." and carries on. ``install()`` also quiets those
-(the flag keeps the interrupt). The command line installs
-``install()``; long loops (simulation ticks, bootstrap chunks, study chunks)
-call ``checkpoint()``, which re-raises a lost interrupt at the next step.
-Without ``install()`` (library use) ``checkpoint()`` does nothing.
+"Exception ignored in ..." (or, from Cython, prints a whole traceback) and
+carries on. ``install()`` quiets those (the flag keeps the interrupt). Long
+loops (simulation ticks, bootstrap chunks, study chunks) call
+``checkpoint()``, which re-raises a lost interrupt at the next step; for the
+stretches with no checkpoint (imports, set-up inside a library) a watchdog
+thread, started by the first SIGINT, sends SIGINT to the main thread again
+every ``RESEND_S`` until the command line has taken the interrupt
+(``acknowledge()``), while the main thread is not already handling it.
+Without ``install()`` (library use) none of this runs.
 """
 
 from __future__ import annotations
 
+import _thread
 import signal
 import sys
+import time
 
 # Only signal at run time: ``swarmtag.cli.main`` imports this module first thing, and until
 # ``install()`` has run a Ctrl-C ends in a traceback.
@@ -25,14 +31,57 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from types import FrameType
 
-__all__ = ["checkpoint", "deferred", "install", "interrupted"]
+__all__ = ["RESEND_S", "acknowledge", "checkpoint", "deferred", "install", "interrupted"]
 
-_state = {"pending": False}
+RESEND_S = 0.2
+"""Seconds between the watchdog's re-sends of a Ctrl-C that nobody has taken yet."""
+
+_state = {"pending": False, "acknowledged": False, "watching": False}
+_main: dict[str, int] = {}
 
 
 def _handler(_signum: int, _frame: FrameType | None) -> None:
-    _state["pending"] = True
+    _flag()
     raise KeyboardInterrupt
+
+
+def _flag() -> None:
+    """Note the interrupt and start the watchdog (once) that keeps it from being lost."""
+    _state["pending"] = True
+    if not _state["watching"] and not _state["acknowledged"] and "thread" in _main:
+        _state["watching"] = True
+        _thread.start_new_thread(_watch, (_main["thread"],))
+
+
+def _handling_interrupt(thread: int) -> bool:
+    """Whether ``thread`` is inside an ``except``/``finally``/``__exit__`` of a Ctrl-C now."""
+    current = sys._current_exceptions().get(thread)  # private, but the only way to look
+    error = current[1] if isinstance(current, tuple) else current  # a 3-tuple before 3.12
+    seen: set[int] = set()
+    while isinstance(error, BaseException) and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__context__  # the CLI re-raises it as its own error, from None
+    return False
+
+
+def _watch(thread: int) -> None:
+    """Re-send SIGINT to the main thread until the command line has taken the interrupt."""
+    while True:
+        time.sleep(RESEND_S)
+        if _state["acknowledged"] or not _state["pending"]:
+            _state["watching"] = False
+            return
+        if not _handling_interrupt(thread):
+            # Lost (swallowed inside a library) or not yet seen: raise it again. A real
+            # signal, not interrupt_main(), so that a blocking call in the main thread wakes.
+            signal.pthread_kill(thread, signal.SIGINT)
+
+
+def acknowledge() -> None:
+    """Tell the watchdog that the interrupt was taken (the command is ending with it)."""
+    _state["acknowledged"] = True
 
 
 def install() -> Callable[[], None]:
@@ -43,23 +92,36 @@ def install() -> Callable[[], None]:
     raises it. Only the main thread may set signal handlers; elsewhere this
     does nothing.
     """
-    _state["pending"] = False
+    _state.update(pending=False, acknowledged=False)
     try:
         previous = signal.signal(signal.SIGINT, _handler)
     except ValueError:  # not the main thread
         return lambda: None
-    previous_hook = sys.unraisablehook
+    if hasattr(signal, "pthread_kill"):  # POSIX: the watchdog can re-send
+        _main["thread"] = _thread.get_ident()
+    previous_unraisable = sys.unraisablehook
+    previous_except = sys.excepthook
 
     def unraisable(info: sys.UnraisableHookArgs) -> None:
         if info.exc_type is KeyboardInterrupt and _state["pending"]:
             return  # ours, swallowed where it arrived: checkpoint() raises it again
-        previous_hook(info)
+        previous_unraisable(info)
+
+    def excepthook(kind: type[BaseException], value: BaseException, trace: object) -> None:
+        # Cython's "unraisable" path prints a full traceback through sys.excepthook.
+        if issubclass(kind, KeyboardInterrupt) and _state["pending"]:
+            return
+        previous_except(kind, value, trace)  # type: ignore[arg-type]
 
     sys.unraisablehook = unraisable
+    sys.excepthook = excepthook
 
     def restore() -> None:
+        _state["acknowledged"] = True  # first: the watchdog must not send to the old handler
+        _main.pop("thread", None)
         signal.signal(signal.SIGINT, previous)
-        sys.unraisablehook = previous_hook
+        sys.unraisablehook = previous_unraisable
+        sys.excepthook = previous_except
 
     return restore
 
@@ -102,5 +164,6 @@ class deferred:  # noqa: N801 - used as ``with deferred():``, like contextlib's 
             return
         signal.signal(signal.SIGINT, self._previous)  # type: ignore[arg-type]
         if self._arrived and kind is None:
-            _state["pending"] = _state["pending"] or self._previous is _handler
+            if self._previous is _handler:
+                _flag()
             raise KeyboardInterrupt

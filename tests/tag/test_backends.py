@@ -251,7 +251,7 @@ def test_sim_draws_phases_from_its_generator():
     first = SimScanner(tags=tags, rng=np.random.default_rng(5))
     second = SimScanner(tags=tags, rng=np.random.default_rng(5))
     assert first._phase == second._phase
-    assert all(0 <= phase < 0.25 for phase in first._phase.values())
+    assert all(0 <= phase < 250_000 for phase in first._phase.values())  # microseconds
 
 
 @pytest.mark.parametrize(

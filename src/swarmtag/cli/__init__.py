@@ -20,13 +20,14 @@ __all__ = ["main"]
 
 def main(argv: Sequence[str] | None = None) -> None:
     """Run the command line (see ``swarmtag --help``); exits with 0, 2 or 130."""
-    from swarmtag._interrupt import install  # noqa: PLC0415 - before the heavy imports
+    from swarmtag._interrupt import acknowledge, install  # noqa: PLC0415 - before the imports
 
     restore = install()
     try:
         try:
             from swarmtag.cli._main import run  # noqa: PLC0415 - numpy, click, rich load here
         except KeyboardInterrupt:
+            acknowledge()
             print("swarmtag: error: aborted", file=sys.stderr)
             sys.exit(130)
         run(argv)

@@ -9,7 +9,7 @@ import click
 
 from swarmtag import __version__
 from swarmtag._checks import show
-from swarmtag._interrupt import checkpoint
+from swarmtag._interrupt import acknowledge, checkpoint
 from swarmtag.cli.calibrate import calibrate_cmd
 from swarmtag.cli.demo import demo
 from swarmtag.cli.metrics import metrics
@@ -85,6 +85,7 @@ def run(argv: Sequence[str] | None = None) -> None:
         finally:
             checkpoint()  # an interrupt swallowed on the way out still ends as one
     except (_Interrupted, KeyboardInterrupt, click.Abort) as interrupt:
+        acknowledge()  # taken: the watchdog that re-sends a lost Ctrl-C can stop
         note = str(interrupt) if isinstance(interrupt, _Interrupted) else ""
         _fail("aborted" + (f"; {note}" if note else ""), EXIT_INTERRUPTED)
     except click.exceptions.NoArgsIsHelpError as error:

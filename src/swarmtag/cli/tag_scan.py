@@ -17,7 +17,7 @@ import time
 import click
 from rich.table import Table
 
-from swarmtag._interrupt import checkpoint
+from swarmtag._interrupt import acknowledge, checkpoint
 from swarmtag.cli._console import make_console
 from swarmtag.tag.backends import Scanner, Sighting, open_scanner
 
@@ -58,6 +58,7 @@ def _listen(scanner: Scanner, timeout: float) -> bool:
                 time.sleep(min(_TICK, left))
                 checkpoint()
     except KeyboardInterrupt:
+        acknowledge()  # taken: the table of what was heard is shown, then the command ends
         return True
 
 

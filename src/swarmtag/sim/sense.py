@@ -36,6 +36,7 @@ from swarmtag.sim.params import Params
 from swarmtag.sim.randomness import TickInputs
 from swarmtag.sim.state import Int, Mode, WorldState
 from swarmtag.tag import TagStatus
+from swarmtag.tag.advertising import adverts_sent
 
 __all__ = [
     "Senses",
@@ -86,10 +87,10 @@ def advertising(phase: Int, tick: int, params: Params) -> NDArray[np.bool_]:
     >>> [bool(advertising(np.array([0]), t, p)[0]) for t in range(1, 6)]
     [False, False, True, False, True]
     """
-    interval = params.advert_us
-    now = (tick * params.tick_us - phase) // interval
-    before = ((tick - 1) * params.tick_us - phase) // interval
-    sent: NDArray[np.bool_] = now > before
+    sent: NDArray[np.bool_] = (
+        adverts_sent(phase, params.advert_us, (tick - 1) * params.tick_us, tick * params.tick_us)
+        > 0
+    )
     return sent
 
 

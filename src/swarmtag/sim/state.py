@@ -23,6 +23,7 @@ from swarmtag.sim.geometry import Float, length
 from swarmtag.sim.params import Params
 from swarmtag.sim.predock import free_faces
 from swarmtag.tag import TagStatus
+from swarmtag.tag.advertising import phase_microseconds
 
 __all__ = ["Int", "Mode", "Scene", "WorldState", "initial_state"]
 
@@ -349,9 +350,9 @@ def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -
         urgency0=urgency0,
         order_time=stack("order_time", np.float64).reshape(runs, c),
         free_face=free_faces(carrier_pos, present, params),
-        advert_phase=np.floor(
-            stack("advert_phase", np.float64).reshape(runs, c) * params.advert_us
-        ).astype(np.int64),
+        advert_phase=phase_microseconds(
+            stack("advert_phase", np.float64).reshape(runs, c), params.advert_us
+        ),
         adv_status=np.repeat(status[:, None, :], slots, axis=1),
         adv_urgency=np.repeat(urgency0[:, None, :], slots, axis=1),
         pickup_time=np.full((runs, c), -1, dtype=np.int64),

@@ -1,7 +1,10 @@
 """A virtual radio: simulated tags advertising to one receiver, deterministic and clock-free.
 
 Each ``SimTag`` advertises its payload every ``interval`` seconds (BLE's
-100-1000 ms range, 250 ms by default) at its own phase. An advert is heard
+100-1000 ms range, 250 ms by default) at its own phase, on the microsecond
+grid of ``tag/advertising.py`` that the simulator's radio channel uses too
+(a tag of the same phase and interval is heard at the same moments in a
+simulated run and by this scanner). An advert is heard
 when the tag is within ``radio_range`` and survives the ``loss`` draw (from
 the scanner's seeded ``numpy.random.Generator``, one draw per advert in time
 order, so the result does not depend on how time is chopped into
@@ -25,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from swarmtag.errors import ConfigError
+from swarmtag.tag.advertising import advert_times, microseconds, phase_microseconds
 from swarmtag.tag.backends.base import DEFAULT_MAX_AGE, Scanner, check_seconds
 from swarmtag.tag.codec import TagState, encode_manufacturer_data
 from swarmtag.tag.status import TagStatus
@@ -46,8 +50,10 @@ def rssi_at(distance: float) -> int:
 class SimTag:
     """One simulated tag: its address, what it advertises and how far it is (metres).
 
-    ``phase`` (seconds, below the interval) is when its first advert goes out
-    after the scanner starts; ``None`` draws it from the scanner's generator.
+    ``phase`` (seconds, below the interval; whole microseconds count) is when
+    its first advert goes out after the scanner starts; ``None`` draws it
+    from the scanner's generator, as a fraction of the interval (as the
+    simulator draws its tags' phases).
     """
 
     address: str
@@ -98,7 +104,9 @@ class SimScanner(Scanner):
         if not isinstance(self._rng, np.random.Generator):
             raise ConfigError(f"rng: expected a numpy.random.Generator, got {rng!r}")
         self._tags: dict[str, SimTag] = {}
-        self._phase: dict[str, float] = {}
+        self._interval_us = microseconds(self.interval)
+        self._phase: dict[str, int] = {}
+        """Each tag's phase in microseconds after the start."""
         for tag in tags:
             self.add(tag)
         self._since: float | None = None
@@ -116,10 +124,12 @@ class SimScanner(Scanner):
             raise ConfigError(f"tags: expected SimTag objects, got {type(tag).__name__}")
         check_seconds(f"{tag.address}: distance", tag.distance, low=0.0, high=1e6)
         if tag.address not in self._phase:
-            drawn = self._rng.random() * self.interval if tag.phase is None else tag.phase
-            self._phase[tag.address] = check_seconds(
-                f"{tag.address}: phase", drawn, high=self.interval
-            )
+            if tag.phase is None:
+                phase = phase_microseconds(self._rng.random(), self._interval_us)
+            else:
+                given = check_seconds(f"{tag.address}: phase", tag.phase, high=self.interval)
+                phase = min(microseconds(given), self._interval_us - 1)
+            self._phase[tag.address] = phase
         self._tags[tag.address] = tag
 
     def set_state(self, address: str, state: TagState) -> None:
@@ -168,14 +178,9 @@ class SimScanner(Scanner):
 
     def _times(self, address: str, after: float, until: float) -> list[float]:
         """Send times of ``address`` in (after, until]: origin + phase + k * interval, k >= 0."""
-        first = self._origin + self._phase[address]
-        k = max(0, math.floor((after - first) / self.interval) + 1)
-        times = []
-        while (sent := first + k * self.interval) <= until:
-            if sent > after:
-                times.append(sent)
-            k += 1
-        return times
+        window = microseconds(after - self._origin), microseconds(until - self._origin)
+        sent = advert_times(self._phase[address], self._interval_us, *window)
+        return [self._origin + at / 1e6 for at in sent]
 
     def _send(self, sent: float, address: str) -> None:
         tag = self._tags[address]
