@@ -10,7 +10,12 @@ import pytest
 
 import swarmtag
 
-OPTIONAL = {"swarmtag.tag.backends.bleak": "bleak"}
+OPTIONAL = {
+    "swarmtag.tag.backends.bleak": "bleak",
+    "swarmtag.tag.backends.bleak_writer": "bleak",
+    "swarmtag.tag.backends.bless": "bless",
+    "swarmtag.tag.backends.loopback": "bleak",
+}
 """Modules that need an extra: skipped (not failed) where it is not installed."""
 MODULES = sorted(info.name for info in pkgutil.walk_packages(swarmtag.__path__, prefix="swarmtag."))
 

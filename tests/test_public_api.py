@@ -20,6 +20,7 @@ PACKAGES = [
     "swarmtag.robot",
     "swarmtag.experiments",
     "swarmtag.calibration",
+    "swarmtag.perception",
 ]
 
 

@@ -22,9 +22,11 @@ what to do instead.
     │   ├── IllegalTransition               that role may not make that status change
     │   └── WriterTableFull                 the tag already tracks as many writers as it can
     ├── StateRecordError (ValueError)       a persisted tag record is corrupt or unknown
-    ├── KeyFileError (ValueError)           a site key file is missing, not private or malformed
+    ├── KeyFileError (ValueError)           a key file is missing, not private or malformed
+    ├── CounterFileError (ValueError)       a writer's counter file is corrupt or unwritable
     ├── PolicyError (ValueError)            bad policy parameter, condition name or inputs
     ├── EventLogError (ValueError)          an event log breaks the schema (names file, row, column)
+    ├── BagError (ValueError)               a ROS 2 bag or topic mapping refused (names what)
     ├── StatisticsError (ValueError)        statistics input refused (no runs, unknown baseline)
     ├── ConfigError (ValueError)            a scenario or backend value or key is not allowed
     ├── RadioError (RuntimeError)           the BLE radio cannot be used (adapter, BlueZ, rights)
@@ -36,15 +38,18 @@ what to do instead.
     ├── CalibrationError (ValueError)       a calibration baseline, free parameter or option refused
     ├── StoreError (RuntimeError)           the results store cannot be opened or is inconsistent
     ├── OutputError (ValueError)            an output path is refused (names the option and path)
-    └── ResourceError (ValueError)          the work asked for cannot fit (says estimate and limit)
+    ├── ResourceError (ValueError)          the work asked for cannot fit (says estimate and limit)
+    └── PerceptionError (ValueError)        a camera image, camera file or marker input is refused
 """
 
 from __future__ import annotations
 
 __all__ = [
+    "BagError",
     "CalibrationError",
     "ConfigError",
     "ConformanceError",
+    "CounterFileError",
     "DeterminismError",
     "EventLogError",
     "FieldRangeError",
@@ -57,6 +62,7 @@ __all__ = [
     "OutputError",
     "PayloadError",
     "PayloadLengthError",
+    "PerceptionError",
     "PolicyError",
     "RadioError",
     "ReplayedWrite",
@@ -164,10 +170,17 @@ class StateRecordError(SwarmtagError, ValueError):
 
 
 class KeyFileError(SwarmtagError, ValueError):
-    """A site key file cannot be used: missing, readable by others, or not a key file.
+    """A site or role key file cannot be used: missing, readable by others, or another kind.
 
     The message names the file and what to do; it never contains the key or
     any other byte of the file, so it is safe to log.
+    """
+
+
+class CounterFileError(SwarmtagError, ValueError):
+    """A writer's counter file cannot be used: not a counter file, corrupt, or not writable.
+
+    The message names the file and what to do.
     """
 
 
@@ -177,6 +190,13 @@ class PolicyError(SwarmtagError, ValueError):
 
 class EventLogError(SwarmtagError, ValueError):
     """An event log breaks the schema; the message names the file, row and column."""
+
+
+class BagError(SwarmtagError, ValueError):
+    """A ROS 2 bag or its topic mapping cannot give an event log, or a recording cannot be written.
+
+    The message names the bag and the topic, field, trial or mapping key at fault.
+    """
 
 
 class StatisticsError(SwarmtagError, ValueError):
@@ -228,3 +248,7 @@ class OutputError(SwarmtagError, ValueError):
 
 class ResourceError(SwarmtagError, ValueError):
     """The work asked for cannot fit this machine; the message gives the estimate and the limit."""
+
+
+class PerceptionError(SwarmtagError, ValueError):
+    """A camera image, camera file or marker input cannot be used; the message names it."""

@@ -21,7 +21,8 @@ from hypothesis import strategies as st
 class Made:
     """A file-system object an invocation needs, made in its working folder before the call.
 
-    ``kind``: ``copy`` (a template), ``edit`` (a template changed by ``op``),
+    ``kind``: ``copy`` (a template), ``secret`` (a template copied with mode
+    0600, as key files must be), ``edit`` (a template changed by ``op``),
     ``bytes`` (``data``), ``dir``, ``fifo``, ``tree`` (a template folder) or
     ``parent`` (only the folder above ``name``).
     """
@@ -121,10 +122,51 @@ def make(token: Made, work: Path, templates: dict[str, Path]) -> None:
         shutil.copytree(templates[token.template], target)
     elif token.kind == "copy":
         shutil.copyfile(templates[token.template], target)
+    elif token.kind == "secret":
+        shutil.copyfile(templates[token.template], target)
+        target.chmod(0o600)
     elif token.kind == "edit":
         target.write_bytes(edit(templates[token.template].read_bytes(), token.op))
     else:
         target.write_bytes(token.data)
+
+
+def make_tag_files(folder: Path) -> None:
+    """A site key, both role keys (mode 0600) and a software tag's state file (marker 12)."""
+    from swarmtag.tag import (
+        FileStore,
+        Role,
+        TagModel,
+        TagState,
+        TagStatus,
+        derive_role_key,
+        write_key_file,
+        write_role_key_file,
+    )
+
+    site = bytes(range(32))
+    write_key_file(folder / "site.key", site)
+    for role in Role:
+        write_role_key_file(folder / f"{role.name.lower()}.key", role, derive_role_key(site, role))
+    waiting = TagState(urgency=5, status=TagStatus.AWAITING_PICKUP, destination=2, marker=12)
+    TagModel.provision(waiting, site_key=site, store=FileStore(folder / "tag.state"))
+
+
+def make_camera_files(folder: Path) -> None:
+    """Camera images of carrier 7 (front, upward, one of another size) and the shipped rig."""
+    import cv2
+    import numpy as np
+
+    from swarmtag.perception import Placement, load_rig, render, rig_path
+
+    rig = load_rig()
+    rng = np.random.default_rng(0)
+    front = render(rig.camera("front"), rig.carrier, [Placement.at(7, 1.0, 0.0, 10.0)], rng=rng)
+    cv2.imwrite(str(folder / "camera.png"), front)
+    cv2.imwrite(str(folder / "small.png"), front[:480, :640])
+    under = render(rig.camera("upward"), rig.carrier, [Placement(7, 0.02, 0.0)], rng=rng)
+    cv2.imwrite(str(folder / "under.png"), under)
+    shutil.copyfile(rig_path("dots-like"), folder / "rig.toml")
 
 
 # --- damaged and missing inputs -----------------------------------------------------------

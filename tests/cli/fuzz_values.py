@@ -183,6 +183,18 @@ EVENT_TABLE = Values(
     ),
 )
 """A long-format event table to read."""
+BAG = Values(
+    st.one_of(copy("trial.mcap"), copy("trial.db3"), st.just(Made("bag", "tree", template="bag"))),
+    st.one_of(
+        edited("trial.mcap", ".mcap", text=False),
+        edited("trial.db3", ".db3", text=False),
+        copy("trial.csv"),
+        copy("mapping.toml"),
+        not_a_file(".mcap"),
+        st.sampled_from(["/proc/x.mcap", "-", "bag.bag"]),
+    ),
+)
+"""A ROS 2 bag to read: bare MCAP and .db3 files, a rosbag2 folder; corrupted and no bags."""
 
 TOML_VALUES = (
     "0", "-1", "1", "1.5", "1e308", "nan", "inf", "-0.0", str(10**30), str(2**63), str(2**53),
@@ -203,6 +215,23 @@ def toml_edit(template: str, keys: Sequence[str]) -> st.SearchStrategy[Token]:
         st.sampled_from([*keys, "nope", "runs.x"]),
         st.sampled_from(TOML_VALUES),
     )
+
+
+MAPPING_KEYS = (
+    "format", "topic", "stamp", "entries", "event", "start", "end", "condition", "run", "seed",
+    "time_unit", "tick", "markers", "urgency0", "order_time", "marker", "status", "urgency",
+    "robot", "idle", "awaiting_pickup", "picked_up", "kind", "carrier", "value",
+)  # fmt: skip
+BAG_MAPPING = Values(
+    copy("mapping.toml"),
+    st.one_of(
+        edited("mapping.toml", ".toml"),
+        toml_edit("mapping.toml", MAPPING_KEYS),
+        copy("profile.toml"),
+        not_a_file(".toml"),
+    ),
+)
+"""A bag mapping to read: the default; damaged copies and other TOML files."""
 
 
 STUDY_KEYS = (
@@ -348,6 +377,148 @@ SCAN_BACKEND = Values(
     ),
 )
 """``tag scan --backend`` (hidden): the simulated radio, or refused names."""
+ADAPTER = texts(["hci0", "hci1"], ["eth0", "hci", "HCI0", "hci0 ", "hci1234"])
+"""``--adapter`` of tag scan and tag write: BlueZ adapter names (the sim and loopback ignore it)."""
+
+
+def secret(template: str) -> st.SearchStrategy[Token]:
+    """A key file template copied with mode 0600, as key files must be."""
+    return st.just(Made(template, "secret", template=template))
+
+
+SITE_KEY = Values(
+    secret("site.key"),
+    st.one_of(
+        secret("robot.key"), copy("site.key"), edited("site.key", ".key"), not_a_file(".key")
+    ),
+)
+"""A site key file to read: the private template; a role key, a shared copy, damage, no file."""
+ROLE_KEY = Values(
+    st.one_of(secret("robot.key"), secret("operator.key")),
+    st.one_of(
+        secret("site.key"), copy("robot.key"), edited("operator.key", ".key"), not_a_file(".key")
+    ),
+)
+"""``tag write --key-file``: role key files; the site key, a shared copy, damage, no file."""
+TAG_STATE = Values(
+    copy("tag.state"),
+    st.one_of(edited("tag.state", ".state", text=False), copy("site.key"), not_a_file(".state")),
+)
+"""``tag write --loopback-state`` (hidden): the software tag's FileStore record (marker 12)."""
+WRITE_OPTIONS: dict[str, Values] = {
+    "address": texts(
+        ["AA:BB:CC:DD:EE:01", "aa:bb:cc:dd:ee:01", "12345678-1234-1234-1234-123456789abc"],
+        ["AA:BB:CC:DD:EE", "AA-BB-CC-DD-EE-01", "AA:BB:CC:DD:EE:0G", "hci0", "12"],
+    ),
+    "key_file": ROLE_KEY,
+    "writer": integers(0, 0xFFFF, (0, 3)),
+    "marker": Values(st.just("12"), integers(0, 255, (0, 11)).good),  # the software tag is 12
+    "counter_file": Values(
+        file_output(".counters").good,
+        st.one_of(file_output(".counters").bad, secret("robot.key"), copy("tag.state")),
+    ),
+    "timeout": Values(
+        st.floats(0.1, 5.0).map(repr),
+        st.one_of(st.sampled_from(["0", "0.05", "-1", "nan", "inf", "601"]), junk),
+    ),
+    "adapter": ADAPTER,
+    "backend": Values(
+        st.just("loopback"),
+        st.one_of(st.sampled_from(["LOOPBACK", "sim", "nope"]), junk).filter(
+            lambda word: word != "bleak"  # the real radio: never opened by the fuzzer
+        ),
+    ),
+    "loopback_state": TAG_STATE,
+    "loopback_key": SITE_KEY,
+}
+"""``tag write``: a software tag through the hidden loopback backend, never a radio."""
+
+
+def _bench_writes() -> bytes:
+    """A replay file for ``tag emulate``: writes to tag 12 under the template site key."""
+    from swarmtag.tag import Change, Role, TagStatus, WriteSigner, derive_role_key
+
+    site = bytes(range(32))  # the key of the site.key template (fuzz_files.make_tag_files)
+    operator = WriteSigner(1, Role.OPERATOR, derive_role_key(site, Role.OPERATOR))
+    robot = WriteSigner(7, Role.ROBOT, derive_role_key(site, Role.ROBOT))
+    lift = robot.sign(12, Change(status=TagStatus.PICKED_UP))
+    writes = [
+        operator.sign(12, Change(urgency=9, status=TagStatus.AWAITING_PICKUP)),
+        lift,
+        lift,  # replayed
+        robot.sign(12, Change(urgency=1)),  # wrong role
+        robot.sign(3, Change(status=TagStatus.IDLE)),  # another tag
+        bytes(20),  # forged
+        b"\x01\x02",  # malformed
+    ]
+    return ("# bench writes\n" + "\n".join(w.hex() for w in writes) + "\n").encode()
+
+
+BENCH_WRITES = Made("writes.txt", "bytes", data=_bench_writes())
+"""``tag emulate --replay``: what the fuzzer serves instead of the radio when none is drawn."""
+EMULATE_OPTIONS: dict[str, Values] = {
+    "key_file": SITE_KEY,
+    "marker": Values(st.just("12"), integers(0, 255, (0, 11)).good),
+    "state_file": Values(
+        st.one_of(file_output(".bin").good, copy("tag.state")),
+        st.one_of(file_output(".bin").bad, edited("tag.state", ".state", text=False)),
+    ),
+    "eink": file_output(".png"),
+    "timeout": SCAN_TIMEOUT,
+    "adapter": ADAPTER,
+    "replay": Values(
+        st.just(BENCH_WRITES),
+        st.one_of(
+            st.just(Made("bad.txt", "bytes", data=b"0102\nzz\n")),
+            st.just(Made("big.txt", "bytes", data=b"00" * (1 << 20))),
+            not_a_file(".txt"),
+        ),
+    ),
+}
+"""``tag emulate``: the software tag on replayed writes (hidden --replay), never a radio."""
+
+IMAGE = Values(
+    st.one_of(copy("camera.png"), copy("under.png")),
+    st.one_of(
+        edited("camera.png", ".png", text=False),
+        copy("small.png"),
+        copy("trial.csv"),
+        copy("rig.toml"),
+        not_a_file(".png"),
+        st.sampled_from(["/proc/x.png", "-"]),
+    ),
+)
+"""``aruco detect IMAGE``: camera images of carrier 7; damaged ones, another size, no image."""
+RIG_KEYS = (
+    "name", "width", "height", "fx", "cx", "horizontal_fov", "distortion", "position", "yaw",
+    "pitch", "kind", "side", "marker_size", "marker_height", "underside_height",
+)  # fmt: skip
+CAMERA_FILE = Values(
+    st.one_of(st.just("dots-like"), copy("rig.toml")),
+    st.one_of(
+        edited("rig.toml", ".toml"),
+        toml_edit("rig.toml", RIG_KEYS),
+        copy("profile.toml"),
+        not_a_file(".toml"),
+        st.sampled_from(["Dots-like", "nope", "nope.toml"]),
+        junk,
+    ),
+)
+"""``aruco --camera``: the shipped rig by name or file; damaged rig files, other TOML files."""
+ARUCO_VIEW = texts(["front", "left", "back", "right", "upward"], ["Front", "top"])
+ARUCO_RENDER: dict[str, Values] = {
+    "out": file_output(".png"),
+    "camera": CAMERA_FILE,
+    "view": ARUCO_VIEW,
+    "distance": Values(st.floats(0.0, 4.0).map(repr), junk),
+    "bearing": Values(st.floats(-180.0, 180.0).map(repr), junk),
+    "turn": Values(st.floats(-180.0, 180.0).map(repr), junk),
+    "blur": floats(0.0, 3.0),
+    "noise": floats(0.0, 20.0),
+    "exposure": floats(0.0, 3.0),
+    "occlusion": floats(0.0, 1.0),
+}
+"""``aruco render``: a carrier anywhere around the robot, any camera, any degradation."""
 
 COMMON: dict[str, Values] = {
     "conditions": CONDITIONS,
@@ -359,6 +530,7 @@ COMMON: dict[str, Values] = {
     "snapshot": file_output(".png", rare=True),
     "animation": file_output(".gif", ".mp4", rare=True),
     "trajectories_out": file_output(".npz"),
+    "mcap": file_output(".mcap"),
     "baseline": texts(["proximity", "urgency:alpha=0.7", "urgency:alpha=3.0"], ["nope"]),
     "resamples": integers(1, 10**9, (1, 50)),
     "runs": integers(1, 2**53, (1, 3)),
@@ -398,8 +570,13 @@ BY_COMMAND: dict[tuple[str, ...], dict[str, Values]] = {
     },
     ("robot", "tree"): {"folder": folder_output()},
     ("tag", "render"): {"out": file_output(".png")},
-    ("tag", "keygen"): {"out": file_output(".key")},
-    ("tag", "scan"): {"timeout": SCAN_TIMEOUT, "backend": SCAN_BACKEND},
+    ("tag", "keygen"): {"out": file_output(".key"), "site_file": SITE_KEY},
+    ("tag", "scan"): {"timeout": SCAN_TIMEOUT, "backend": SCAN_BACKEND, "adapter": ADAPTER},
+    ("tag", "write"): WRITE_OPTIONS,
+    ("tag", "emulate"): EMULATE_OPTIONS,
+    ("log", "import"): {"bag": BAG, "mapping": BAG_MAPPING},
+    ("aruco", "render"): ARUCO_RENDER,
+    ("aruco", "detect"): {"image": IMAGE, "camera": CAMERA_FILE, "view": ARUCO_VIEW},
     ("calibrate",): {
         "baseline": BASELINE,
         "out": with_inputs(file_output(".toml")),
@@ -422,6 +599,12 @@ INPUTS = {
     ("study", "report"): ("sources",),
     ("reproduce",): ("sources",),
     ("profiles",): ("name",),
+    ("tag", "keygen"): ("site_file",),
+    ("tag", "write"): ("key_file", "loopback_key"),
+    ("tag", "emulate"): ("key_file", "replay"),
+    ("log", "import"): ("bag", "mapping"),
+    ("aruco", "render"): ("camera",),
+    ("aruco", "detect"): ("image", "camera"),
 }
 """Parameters that name files a command reads (which no success may change), by command."""
 
@@ -441,6 +624,7 @@ OUTPUTS: dict[tuple[str, ...], dict[str, str]] = {
         "snapshot": "per-condition",
         "animation": "per-condition",
         "trajectories_out": "per-condition",
+        "mcap": "per-condition",
     },
     ("metrics",): {"markdown": "file", "latex": "file", "html_out": "file", "figures": "folder"},
     ("calibrate",): {"out": "file", "report": "file", "cache_path": "optional"},
@@ -450,5 +634,9 @@ OUTPUTS: dict[tuple[str, ...], dict[str, str]] = {
     ("robot", "tree"): {"folder": "folder"},
     ("tag", "render"): {"out": "file"},
     ("tag", "keygen"): {"out": "file"},
+    ("tag", "write"): {"counter_file": "file", "loopback_state": "optional"},
+    ("tag", "emulate"): {"state_file": "file", "eink": "file"},
+    ("log", "import"): {"events": "file", "event_table": "file"},
+    ("aruco", "render"): {"out": "file"},
 }
 """The outputs of each command, by parameter name: what a success must have written."""

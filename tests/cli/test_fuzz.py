@@ -16,6 +16,9 @@ Every invocation must exit 0 or 2; exit 2 prints exactly one
 have said what it started); no invocation prints a traceback; a failing one
 leaves its working folder exactly as it was (no staging folder, no
 ``*.tmp``), a succeeding one writes every output it names and nothing else.
+``tag write`` may also exit 1, when the (software) tag refused the write:
+then with exactly one ``swarmtag: refused:`` line, and nothing written but
+its outputs (the counter it spent).
 
 Invocations are kept cheap: simulations get at most 30 ticks (and a static
 time limit of 30) unless those are drawn, resample, run and evaluation counts
@@ -69,8 +72,11 @@ from tests.cli.fuzz_files import (
     Made,
     Token,
     make,
+    make_camera_files,
+    make_tag_files,
 )
 from tests.cli.fuzz_values import (
+    BENCH_WRITES,
     CHEAP,
     INPUTS,
     OUTPUTS,
@@ -81,6 +87,7 @@ from tests.cli.fuzz_values import (
     junk,
     values,
 )
+from tests.io.bag_builders import write_fuzz_bags
 
 SEED = int(os.environ.get("SWARMTAG_FUZZ_SEED", "0"))
 """Hypothesis seed of every fuzz test (``SWARMTAG_FUZZ_SEED``)."""
@@ -100,8 +107,14 @@ NORMAL_EXAMPLES = {
     ("tag", "render"): 60,
     ("tag", "keygen"): 40,
     ("tag", "scan"): 30,
+    ("tag", "write"): 60,
+    ("tag", "emulate"): 60,
+    ("log", "import"): 60,
+    ("log", "mapping"): 5,
+    ("aruco", "render"): 50,
+    ("aruco", "detect"): 50,
 }
-"""Invocations per command in the normal suite (2,178 in all)."""
+"""Invocations per command in the normal suite (2,463 in all)."""
 TOTAL = int(os.environ.get("SWARMTAG_FUZZ_EXAMPLES", "0")) or sum(NORMAL_EXAMPLES.values())
 """Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``."""
 HANG_SECONDS = 60
@@ -112,6 +125,8 @@ GUARD_MEMORY = "1KiB"
 """The limit of invocations whose input would start real work: refused before it starts."""
 BADNESS = (3, 20, 50, 90)
 """Percent chances that an invocation's values are bad ones, one drawn per invocation."""
+REFUSING = {("tag", "write"): "swarmtag: refused: "}
+"""Commands that exit 1 when the device they talk to refuses, with the line they print then."""
 
 
 def examples(path: tuple[str, ...]) -> int:
@@ -138,7 +153,7 @@ COMMANDS = walk(app)
 
 @pytest.fixture(scope="module")
 def templates(tmp_path_factory) -> dict[str, Path]:
-    """What working folders copy: logs, tables, study, targets, scenario, profile, results."""
+    """What working folders copy: logs, tables, study, targets, scenario, profile, results, keys."""
     from swarmtag.experiments import load_study, run_study
     from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
     from swarmtag.policy import Proximity, Urgency
@@ -160,6 +175,9 @@ def templates(tmp_path_factory) -> dict[str, Path]:
     profile = profile_path("base").read_text(encoding="utf-8")
     (folder / "profile.toml").write_text(profile.replace('name = "base"', 'name = "mine"'))
     run_study(load_study(str(folder / "study.toml")), out_dir=folder / "results", workers=1)
+    make_tag_files(folder)
+    write_fuzz_bags(folder)  # trial.mcap, trial.db3, bag/ and mapping.toml
+    make_camera_files(folder)  # camera.png, small.png, under.png and rig.toml
     return {path.name: path for path in folder.iterdir()}
 
 
@@ -228,10 +246,35 @@ def invocations(draw: st.DrawFn, path: tuple[str, ...]) -> Invocation:
         fallback = [str(default)] if isinstance(default, str | Path) else []
         call.outputs += [(kind, value) for value in (call.given.get(name) or fallback)[-1:]]
     out = call.given.get("out", [])
+    keys = call.given.get("key_file", [])
+    if path == ("tag", "write") and not call.given.get("counter_file") and keys:
+        call.outputs.append(("file", f"{word(keys[-1])}.counters"))  # next to the key file
     if path == ("calibrate",) and not call.given.get("cache_path") and out:
         with contextlib.suppress(ValueError):  # a name calibrate refuses anyway
             call.outputs.append(("optional", str(default_cache_path(Path(word(out[-1]))))))
     return cheap(draw, path, call)
+
+
+def no_radio(draw: st.DrawFn, path: tuple[str, ...], call: Invocation) -> None:
+    """Never a real radio: ``tag scan`` hears the sim radio (never the default 10 s), and
+    ``tag write`` writes to the templates' software tag (the hidden loopback backend).
+    """
+    if path == ("tag", "scan"):
+        if not call.given.get("backend"):
+            call.argv += ["--backend", "sim"]
+        if not call.given.get("timeout"):
+            call.argv += ["--timeout", draw(SCAN_TIMEOUT.good)]
+        return
+    if not call.given.get("backend"):
+        call.argv += ["--backend", "loopback"]
+    for option, made in (
+        ("loopback_state", Made("tag.state", "copy", "tag.state")),
+        ("loopback_key", Made("site.key", "secret", "site.key")),
+    ):
+        if not call.given.get(option):
+            call.argv += [f"--{option.replace('_', '-')}", made]
+            if option == "loopback_state":
+                call.outputs.append(("optional", made.name))  # an accepted write changes it
 
 
 def cheap(draw: st.DrawFn, path: tuple[str, ...], call: Invocation) -> Invocation:
@@ -243,11 +286,10 @@ def cheap(draw: st.DrawFn, path: tuple[str, ...], call: Invocation) -> Invocatio
             flag = call.given.get(key) if key == "ticks" else None
             if not flag and not any(text.startswith(f"{key}=") for text in settings_):
                 call.argv += ["--set", f"{key}={draw(CHEAP[key])}"]
-    if path == ("tag", "scan"):  # never a real radio, never the default 10 s
-        if not call.given.get("backend"):
-            call.argv += ["--backend", "sim"]
-        if not call.given.get("timeout"):
-            call.argv += ["--timeout", draw(SCAN_TIMEOUT.good)]
+    if path in (("tag", "scan"), ("tag", "write")):
+        no_radio(draw, path, call)
+    if path == ("tag", "emulate") and not call.given.get("replay"):
+        call.argv += ["--replay", BENCH_WRITES]  # the software tag never touches a radio
     if path == ("reproduce",) and draw(st.booleans()):
         call.made.append(Made("out", "dir"))  # so that the default --out out/reproduction works
     if path in (("simulate",), ("metrics",)) and not call.given.get("resamples"):
@@ -431,14 +473,20 @@ class Result:
         """The contract of one invocation (see the module docstring)."""
         if self.crash:
             self.fail("raised instead of exiting")
-        if self.code not in (0, 2):
+        refused = self.code == 1 and call.path in REFUSING
+        if self.code not in (0, 2) and not refused:
             self.fail(f"exit status {self.code!r}, not 0 or 2")
         if "Traceback" in self.out or "Traceback" in self.err:
             self.fail("printed a traceback")
         gone = sorted(set(before) - set(after))
         if gone:
             self.fail(f"removed {gone}")
-        left = [p for p in after if Path(p).name.startswith(STAGING_PREFIX) or p.endswith(".tmp")]
+        left = [
+            p
+            for p in after
+            if (Path(p).name.startswith(STAGING_PREFIX) or p.endswith(".tmp"))
+            and not (self.code == 0 and allowed(p, call.outputs))  # asked for: --out x.tmp
+        ]
         if left:
             self.fail(f"left {left}")
         changed = sorted(p for p in after if before.get(p) != after[p])
@@ -449,8 +497,7 @@ class Result:
             if self.code == 2:
                 self.check_refusal()
             return
-        if "swarmtag: error:" in self.err:
-            self.fail("succeeded but printed an error")
+        self.check_said(call, refused=refused)
         stray = [p for p in changed if not allowed(p, call.outputs)]
         if stray:
             self.fail(f"wrote {stray}, which no option names")
@@ -459,9 +506,19 @@ class Result:
         overwritten = sorted(read.intersection(changed))
         if overwritten:
             self.fail(f"changed {overwritten}, which it reads")
-        missing = not_written(call.outputs)
+        missing = [] if refused else not_written(call.outputs)
         if missing:
             self.fail(f"succeeded without writing {missing}")
+
+    def check_said(self, call: Invocation, *, refused: bool) -> None:
+        """A success prints no error; a device's refusal (exit 1) is exactly its one line."""
+        if not refused:
+            if "swarmtag: error:" in self.err:
+                self.fail("succeeded but printed an error")
+            return
+        lines = self.err.split("\n")
+        if len(lines) != 2 or lines[1] or not self.err.startswith(REFUSING[call.path]):
+            self.fail(f"refused, but not in exactly one {REFUSING[call.path]!r} line")
 
     def check_refusal(self) -> None:
         lines = self.err.split("\n")

@@ -1,4 +1,4 @@
-"""``swarmtag tag keygen --out FILE``, driven through click's CliRunner on the command itself."""
+"""``swarmtag tag keygen [--role R --from SITE.key] --out FILE``, through click's CliRunner."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from click.testing import CliRunner
 
 from swarmtag.cli.tag_keys import keygen_cmd
-from swarmtag.tag import read_key_file
+from swarmtag.tag import Role, derive_role_key, read_key_file, read_role_key_file
 
 
 def _keygen(*args: str):
@@ -73,3 +73,50 @@ def test_help_names_the_command_and_the_promise():
     assert result.exit_code == 0
     assert "never printed" in " ".join(result.output.split())
     assert keygen_cmd.name == "keygen"
+
+
+# --- role key files: keygen --role ROLE --from SITE.key --------------------------------------
+
+
+@pytest.mark.parametrize("role", ["robot", "operator"])
+def test_keygen_derives_a_role_key_file_and_never_prints_it(tmp_path, role):
+    site = tmp_path / "site.key"
+    assert _keygen("--out", str(site)).exit_code == 0
+    out = tmp_path / f"{role}.key"
+    result = _keygen("--role", role, "--from", str(site), "--out", str(out))
+    assert result.exit_code == 0, result.output
+    found, key = read_role_key_file(out)
+    assert found is Role[role.upper()]
+    assert key == derive_role_key(read_key_file(site), found)
+    if os.name == "posix":
+        assert stat.S_IMODE(out.stat().st_mode) == 0o600
+    assert key.hex() not in result.output
+    assert read_key_file(site).hex() not in result.output
+    assert f"give it only to {role} machines" in result.output
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [(["--role", "robot"], "--role needs --from"), (["--from", "site.key"], "--from needs --role")],
+)
+def test_role_and_from_come_together(tmp_path, args, words):
+    result = _keygen(*args, "--out", str(tmp_path / "x.key"))
+    assert result.exit_code == 2
+    assert words in result.output
+    assert not (tmp_path / "x.key").exists()
+
+
+def test_a_role_key_file_is_no_site_key_to_derive_from(tmp_path):
+    site, robot = tmp_path / "site.key", tmp_path / "robot.key"
+    assert _keygen("--out", str(site)).exit_code == 0
+    assert _keygen("--role", "robot", "--from", str(site), "--out", str(robot)).exit_code == 0
+    result = _keygen("--role", "operator", "--from", str(robot), "--out", str(tmp_path / "o.key"))
+    assert result.exit_code == 2
+    assert "is a robot key file, not a site key file" in result.output
+    assert not (tmp_path / "o.key").exists()
+
+
+def test_an_unknown_role_is_refused(tmp_path):
+    result = _keygen("--role", "admin", "--from", "site.key", "--out", str(tmp_path / "x.key"))
+    assert result.exit_code == 2
+    assert "admin" in result.output

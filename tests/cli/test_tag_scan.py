@@ -34,7 +34,7 @@ def fake(monkeypatch):
     scanner.feed("PHONE", {0x004C: b"\x02\x15"})
     scanner.feed("BROKEN", {0xFFFF: b"\x0a\x01\x02\x0c"})
     clock.now = 11.5
-    monkeypatch.setattr(tag_scan, "_open", lambda backend: scanner)
+    monkeypatch.setattr(tag_scan, "_open", lambda backend, adapter: scanner)
     return scanner
 
 
@@ -79,7 +79,7 @@ def test_json_is_one_object(capsys, fake):
 
 
 def test_nothing_in_range(capsys, monkeypatch):
-    monkeypatch.setattr(tag_scan, "_open", lambda backend: FakeScanner())
+    monkeypatch.setattr(tag_scan, "_open", lambda backend, adapter: FakeScanner())
     code, out, _err = run(capsys, "--timeout", "0")
     assert code == 0
     assert out.startswith("no tags in range\n")
@@ -88,14 +88,14 @@ def test_nothing_in_range(capsys, monkeypatch):
 def test_radio_failure_is_one_line_exit_2(capsys, monkeypatch):
     scanner = FakeScanner()
     scanner.fail(RadioError("no Bluetooth adapter found: plug in a BLE adapter"))
-    monkeypatch.setattr(tag_scan, "_open", lambda backend: scanner)
+    monkeypatch.setattr(tag_scan, "_open", lambda backend, adapter: scanner)
     code, out, err = run(capsys, "--timeout", "5")
     assert (code, out) == (2, "")
     assert err == "swarmtag: error: no Bluetooth adapter found: plug in a BLE adapter\n"
 
 
 def test_missing_ble_extra_is_one_line_exit_2(capsys, monkeypatch):
-    def missing(backend):
+    def missing(backend, adapter):
         raise ConfigError(
             "backend 'bleak' needs the bleak package, which is not installed: pip install 'swarmtag[ble]'"
         )
@@ -115,7 +115,7 @@ class Interrupted(FakeScanner):
 def test_ctrl_c_shows_what_was_seen_then_exits_130(capsys, monkeypatch):
     scanner = Interrupted()
     scanner.feed("AA:01", {0xFFFF: bytes([3, 0, 1, 7])})
-    monkeypatch.setattr(tag_scan, "_open", lambda backend: scanner)
+    monkeypatch.setattr(tag_scan, "_open", lambda backend, adapter: scanner)
     code, out, err = run(capsys, "--timeout", "60", "--json")
     assert code == 130
     assert [tag["marker"] for tag in json.loads(out)["tags"]] == [7]
@@ -142,3 +142,32 @@ def test_the_backend_option_is_hidden(capsys):
     assert code == 0
     assert "--timeout" in out
     assert "--backend" not in out
+
+
+def test_adapter_reaches_the_scanner(capsys, monkeypatch):
+    asked = []
+
+    def opened(backend, adapter):
+        asked.append((backend, adapter))
+        return FakeScanner()
+
+    monkeypatch.setattr(tag_scan, "_open", opened)
+    code, _out, _err = run(capsys, "--timeout", "0", "--adapter", "hci1")
+    assert code == 0
+    assert asked == [("bleak", "hci1")]
+    assert run(capsys, "--timeout", "0")[0] == 0
+    assert asked[-1] == ("bleak", None)
+
+
+@pytest.mark.parametrize("adapter", ["eth0", "hci", "HCI0", "hci0 ", ""])
+def test_a_bad_adapter_is_one_line_exit_2(capsys, adapter):
+    code, out, err = run(capsys, "--timeout", "0", "--adapter", adapter)
+    assert (code, out) == (2, "")
+    assert "not a BlueZ adapter name such as hci0 or hci1" in err
+    assert err.count("\n") == 1
+
+
+def test_the_bleak_backend_gets_the_adapter():
+    pytest.importorskip("bleak")
+    scanner = tag_scan._open("bleak", "hci2")
+    assert scanner.adapter == "hci2"

@@ -22,7 +22,7 @@ from bleak.exc import BleakDBusError, BleakError
 from swarmtag.errors import RadioError
 from swarmtag.tag import TagState, TagStatus
 from swarmtag.tag.backends import open_scanner
-from swarmtag.tag.backends.bleak import BleakTagScanner, explain
+from swarmtag.tag.backends.bleak import BleakTagScanner, adapter_options, explain
 
 OURS = {0xFFFF: bytes([7, 1, 3, 12])}
 
@@ -207,6 +207,7 @@ def test_retries_are_bounded_then_the_scanner_reports_failed(fake_bleak):
         (PermissionError(13, "Permission denied"), "usermod -aG bluetooth"),
         (BleakError("No Bluetooth adapters found."), "no Bluetooth adapter found"),
         (BleakDBusError("org.freedesktop.DBus.Error.AccessDenied", []), "permission denied"),
+        (BleakError("adapter 'hci5' not found"), "no Bluetooth adapter 'hci5' not found"),
     ],
 )
 def test_errors_no_retry_can_fix_fail_at_once_and_say_how_to_fix(fake_bleak, error, says):
@@ -252,9 +253,53 @@ def test_explain_names_powered_off_adapters():
     assert "bluetoothctl power on" in explain(error)
 
 
+def test_the_adapter_reaches_the_scanner_the_way_bleak_takes_it(fake_bleak):
+    scanner = BleakTagScanner(scanner_factory=fake_bleak, adapter="hci1")
+    with scanner:
+        wait_for(lambda: 12 in scanner.states())
+    options = fake_bleak.made[0].options
+    assert options.pop("scanning_mode") == "active"
+    assert options == adapter_options("hci1")
+    assert options in ({"bluez": {"adapter": "hci1"}}, {"adapter": "hci1"})
+    # bleak's own scanner takes exactly those options (a deprecation warning would be an error)
+    import bleak
+
+    real = bleak.BleakScanner(detection_callback=scanner.detection_callback, **options)
+    assert real is not None
+
+
+def test_adapter_options_follow_the_installed_bleak(monkeypatch):
+    import sys
+    import types
+
+    assert adapter_options(None) == {} == adapter_options(None, client=True)
+    new = types.ModuleType("bleak.args.bluez")  # bleak >= 3.0: the adapter is a BlueZ arg
+    new.BlueZScannerArgs = type("BlueZScannerArgs", (), {"__annotations__": {"adapter": str}})
+    new.BlueZClientArgs = type("BlueZClientArgs", (), {"__annotations__": {"adapter": str}})
+    monkeypatch.setitem(sys.modules, "bleak.args.bluez", new)
+    assert adapter_options("hci2") == {"bluez": {"adapter": "hci2"}}
+    assert adapter_options("hci2", client=True) == {"bluez": {"adapter": "hci2"}}
+    old = types.ModuleType("bleak.args.bluez")  # bleak 1.x / 2.x: scanner args without it
+    old.BlueZScannerArgs = type("BlueZScannerArgs", (), {"__annotations__": {"filters": dict}})
+    monkeypatch.setitem(sys.modules, "bleak.args.bluez", old)
+    assert adapter_options("hci2") == {"adapter": "hci2"}
+    assert adapter_options("hci2", client=True) == {"adapter": "hci2"}
+    monkeypatch.setitem(sys.modules, "bleak.args.bluez", None)  # bleak < 1.0: no bleak.args
+    assert adapter_options("hci2") == {"adapter": "hci2"}
+
+
 @pytest.mark.parametrize(
     ("option", "value"),
-    [("retries", -1), ("retries", 1.5), ("scanning_mode", "loud"), ("backoff", float("inf"))],
+    [
+        ("retries", -1),
+        ("retries", 1.5),
+        ("scanning_mode", "loud"),
+        ("backoff", float("inf")),
+        ("adapter", "wlan0"),
+        ("adapter", "hci"),
+        ("adapter", "hci0\n"),
+        ("adapter", 0),
+    ],
 )
 def test_bad_options_are_refused(option, value):
     from swarmtag.errors import ConfigError

@@ -40,9 +40,11 @@ from swarmtag.tag import (
     encode,
     encode_manufacturer_data,
     read_key_file,
+    read_role_key_file,
     sign,
     verify,
     write_key_file,
+    write_role_key_file,
 )
 from tests.strategies import changes, tag_states
 
@@ -203,6 +205,8 @@ TARGETS: dict[str, tuple[Callable[..., object], int, type | tuple[type, ...]]] =
     "encode_manufacturer_data": (encode_manufacturer_data, 1, dict),
     "read_key_file": (_in_scratch(read_key_file), 1, bytes),
     "write_key_file": (_in_scratch(write_key_file), 2, Path),
+    "read_role_key_file": (_in_scratch(read_role_key_file), 1, tuple),
+    "write_role_key_file": (_in_scratch(write_role_key_file), 3, Path),
     "sign": (sign, 2, bytes),
     "verify": (verify, 2, Write),
 }

@@ -27,9 +27,12 @@ from swarmtag.tag import keys as keys_module
 from swarmtag.tag.keys import (
     HKDF_SALT,
     KEY_FILE_HEADER,
+    ROLE_KEY_FILE_HEADERS,
     ROLE_KEY_INFO,
     SITE_KEY_LENGTH,
     hkdf_sha256,
+    read_role_key_file,
+    write_role_key_file,
 )
 from tests.tag import test_write as vectors
 from tests.tag.test_write import RFC_5869_CASES
@@ -288,6 +291,114 @@ def test_names_too_long_for_the_system_are_key_file_errors(tmp_path, monkeypatch
     assert list(tmp_path.iterdir()) == []
 
 
+# --- role key files ---------------------------------------------------------------------------
+
+
+def test_role_key_file_headers_are_the_documented_ones():
+    assert dict(ROLE_KEY_FILE_HEADERS) == {
+        Role.ROBOT: "swarmtag-robot-key-v1",
+        Role.OPERATOR: "swarmtag-operator-key-v1",
+    }
+
+
+@pytest.mark.parametrize("role", list(Role))
+def test_role_key_file_round_trip_format_and_mode(tmp_path, role):
+    key = derive_role_key(KEY, role)
+    path = write_role_key_file(tmp_path / "role.key", role, key)
+    header = ROLE_KEY_FILE_HEADERS[role]
+    assert path.read_bytes() == f"{header}\n{key.hex()}\n".encode()
+    if os.name == "posix":
+        assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    found, read = read_role_key_file(path)
+    assert found is role
+    assert read == key == derive_role_key(KEY, role)
+    assert [p.name for p in tmp_path.iterdir()] == ["role.key"]
+
+
+def test_the_site_key_file_is_refused_where_a_role_key_is_expected(tmp_path):
+    site = write_key_file(tmp_path / "site.key", KEY)
+    with pytest.raises(KeyFileError) as caught:
+        read_role_key_file(site)
+    assert str(caught.value) == (
+        f"key file {site} is the site key file, not a role key file: a writer holds only its "
+        f"role's key; derive one with 'swarmtag tag keygen --role robot|operator --from {site} "
+        "--out ROLE.key'"
+    )
+
+
+@pytest.mark.parametrize("role", list(Role))
+def test_a_role_key_file_is_refused_where_the_site_key_is_expected(tmp_path, role):
+    path = write_role_key_file(tmp_path / "role.key", role, derive_role_key(KEY, role))
+    with pytest.raises(KeyFileError) as caught:
+        read_key_file(path)
+    message = str(caught.value)
+    assert message.startswith(
+        f"key file {path} is a {role.name.lower()} key file, not a site key file"
+    )
+    assert "'swarmtag tag keygen --out FILE'" in message
+    assert derive_role_key(KEY, role).hex() not in message
+
+
+ROBOT_GOOD = f"swarmtag-robot-key-v1\n{KEY.hex()}\n".encode()
+
+
+@pytest.mark.parametrize(
+    "data",
+    [
+        b"",
+        ROBOT_GOOD.replace(b"robot", b"admin"),
+        ROBOT_GOOD.replace(b"v1", b"v2"),
+        ROBOT_GOOD.rstrip(b"\n"),
+        ROBOT_GOOD + b"x\n",
+        ROBOT_GOOD.replace(b"\n", b"\r\n"),
+        f"swarmtag-operator-key-v1\n{KEY.hex()[:-2]}\n".encode(),
+        f"swarmtag-robot-key-v1\n{KEY.hex()}0\n".encode(),
+        f"swarmtag-robot-key-v1\n{KEY.hex()[:-1]}z\n".encode(),
+        b"\xff" * 90,
+    ],
+    ids=lambda data: repr(data[:12]),
+)
+def test_bad_role_key_content_is_one_message_without_the_content(tmp_path, data):
+    path = _private(tmp_path / "role.key", data)
+    with pytest.raises(KeyFileError) as caught:
+        read_role_key_file(path)
+    message = str(caught.value)
+    assert message == (
+        f"key file {path} is not a swarmtag role key file: expected the line "
+        "'swarmtag-robot-key-v1' or 'swarmtag-operator-key-v1', then a line of 64 hex digits "
+        "(derive one with 'swarmtag tag keygen --role robot|operator --from SITE.key --out FILE')"
+    )
+    assert KEY.hex()[:16] not in message
+
+
+@posix_only
+@pytest.mark.parametrize("mode", [0o640, 0o604, 0o644])
+def test_role_key_readable_by_others_is_refused(tmp_path, mode):
+    key = derive_role_key(KEY, Role.ROBOT)
+    path = write_role_key_file(tmp_path / "robot.key", Role.ROBOT, key)
+    path.chmod(mode)
+    with pytest.raises(KeyFileError) as caught:
+        read_role_key_file(path)
+    assert f"(mode {mode:04o})" in str(caught.value)
+    assert f"chmod 600 {path}" in str(caught.value)
+    assert key.hex() not in str(caught.value)
+
+
+def test_role_key_files_are_never_overwritten_and_refuse_bad_arguments(tmp_path):
+    path = write_role_key_file(tmp_path / "robot.key", Role.ROBOT, derive_role_key(KEY, Role.ROBOT))
+    before = path.read_bytes()
+    with pytest.raises(KeyFileError, match="already exists; refusing to overwrite"):
+        write_role_key_file(path, Role.OPERATOR, derive_role_key(KEY, Role.OPERATOR))
+    assert path.read_bytes() == before
+    with pytest.raises(FieldRangeError, match="role: 3"):
+        write_role_key_file(tmp_path / "x.key", 3, KEY)
+    with pytest.raises(FieldRangeError, match="32-byte key, got 16"):
+        write_role_key_file(tmp_path / "x.key", Role.ROBOT, KEY[:16])
+    with pytest.raises(KeyFileError, match="does not exist"):
+        read_role_key_file(tmp_path / "missing.key")
+    assert [p.name for p in tmp_path.iterdir()] == ["robot.key"]
+
+
 # --- docs/hardware.md states what the firmware needs, as the code has it ---------------------
 
 
@@ -309,7 +420,7 @@ def test_hardware_doc_states_the_derivation_uuids_codes_and_vectors():
         f"`{vectors.ROBOT_LIFT[:12].hex()}` `{vectors.ROBOT_LIFT[12:].hex()}`",
         f"`{vectors.OPERATOR_WRITE[:12].hex()}` `{vectors.OPERATOR_WRITE[12:].hex()}`",
         KEY_FILE_HEADER,
-        "still to come in this issue",
+        *ROLE_KEY_FILE_HEADERS.values(),
     ):
         assert value in text, value
     for error, code in ATT_ERRORS.items():

@@ -10,8 +10,10 @@ import click
 from swarmtag import __version__
 from swarmtag._checks import show
 from swarmtag._interrupt import acknowledge, checkpoint
+from swarmtag.cli.aruco import aruco
 from swarmtag.cli.calibrate import calibrate_cmd
 from swarmtag.cli.demo import demo
+from swarmtag.cli.log import log_group
 from swarmtag.cli.metrics import metrics
 from swarmtag.cli.profiles import profiles_cmd
 from swarmtag.cli.robot import robot
@@ -54,12 +56,14 @@ def app() -> None:
 app.add_command(tag)
 app.add_command(demo)
 app.add_command(metrics)
+app.add_command(log_group)
 app.add_command(simulate_cmd)
 app.add_command(study)
 app.add_command(reproduce)
 app.add_command(profiles_cmd)
 app.add_command(calibrate_cmd)
 app.add_command(robot)
+app.add_command(aruco)
 
 
 def _one_line(text: str) -> str:
@@ -74,7 +78,9 @@ def _fail(message: str, status: int) -> None:
 def run(argv: Sequence[str] | None = None) -> None:
     """Run the command line: exit 0, 2 with one line on stderr on bad input, 130 on Ctrl-C.
 
-    ``swarmtag.cli.main`` installs the SIGINT handler before calling this.
+    A command may end with its own status by returning it (``tag write``
+    returns 1 when the tag refused the write). ``swarmtag.cli.main`` installs
+    the SIGINT handler before calling this.
     """
     for position, word in enumerate(argv or (), start=1):
         if "\0" in word:  # no shell can pass one; click's path checks would raise ValueError

@@ -21,6 +21,7 @@ from swarmtag.cli._scenario import build_scenario, scenario_options
 from swarmtag.cli.metrics import render_choices, render_report, summarize_with_choices
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
+from swarmtag.io.ros_types import require_rosbags
 from swarmtag.policy import Policy, Proximity, Urgency, Weighted, parse_policy
 from swarmtag.sim import Scenario, simulate
 from swarmtag.sim.runner import CONTROLLERS, LOG_BYTES_PER_CARRIER, batch_memory
@@ -88,15 +89,19 @@ def _plan_outputs(
             plan.file(option, target, suffixes=suffixes)
 
 
-def _check_work(scenario: Scenario, conditions: int, runs: int, run_offset: int) -> None:
-    """Refuse run counts whose logs cannot fit in memory, before simulating anything."""
+def _check_work(
+    scenario: Scenario, conditions: int, runs: int, run_offset: int, *, record: bool = False
+) -> None:
+    """Refuse run counts whose logs (and a recorded run, ``record``) cannot fit in memory."""
     if run_offset + runs > MAX_RUN_INDEX:
         msg = f"--run-offset {run_offset} + --runs {runs} exceeds the largest run index 2**53"
         raise ConfigError(msg)
     check_memory(
         f"--runs {runs} of {conditions} condition(s) with {scenario.carriers} carriers",
         conditions * runs * scenario.carriers * LOG_BYTES_PER_CARRIER
-        + batch_memory(scenario, min(runs, CHUNK_RUNS)),
+        + max(
+            batch_memory(scenario, min(runs, CHUNK_RUNS)), batch_memory(scenario, 1, record=record)
+        ),
         error=ConfigError,
     )
 
@@ -150,6 +155,7 @@ def _draw(
     snapshot_path: Path | None,
     animation_path: Path | None,
     trajectories_path: Path | None,
+    mcap_path: Path | None,
     stage: Stage,
     controller: str,
 ) -> list[str]:
@@ -184,6 +190,12 @@ def _draw(
             written.append(
                 f"trajectories of {policy.name} run {run} ({traj.ticks} ticks): {target}"
             )
+        if mcap_path is not None:
+            from swarmtag.sim.mcap import write_mcap  # noqa: PLC0415 - rosbags is an extra
+
+            target = _per_condition(mcap_path, policy, several)
+            ticks = write_mcap(stage.path(target), traj, result.carriers, result.events, run=run)
+            written.append(f"MCAP of {policy.name} run {run} ({ticks} ticks): {target}")
     return written
 
 
@@ -243,9 +255,16 @@ def _draw(
     help="Save the drawn run's per-tick trajectories for replay (.npz).",
 )
 @click.option(
+    "--mcap",
+    type=click.Path(path_type=Path),
+    help="Write the drawn run as MCAP with ROS 2 messages (.mcap): for Foxglove, and "
+    "'swarmtag log import' gives its event log back (the bags extra).",
+)
+@click.option(
     "--draw-run",
     type=click.IntRange(0, MAX_RUN_INDEX - 1),  # a run index: below 2**53, as --run-offset + i
-    help="Run to draw or save with --snapshot/--animate/--trajectories [default: the first run].",
+    help="Run to draw or save with --snapshot/--animate/--trajectories/--mcap "
+    "[default: the first run].",
 )
 @click.option(
     "--controller",
@@ -280,6 +299,7 @@ def simulate_cmd(
     snapshot: Path | None,
     animation: Path | None,
     trajectories_out: Path | None,
+    mcap: Path | None,
     draw_run: int | None,
     controller: str,
     baseline: str | None,
@@ -309,9 +329,14 @@ def simulate_cmd(
             ("--snapshot", snapshot, (".png",), True),
             ("--animate", animation, (".gif", ".mp4"), True),
             ("--trajectories", trajectories_out, (".npz",), True),
+            ("--mcap", mcap, (".mcap",), True),
         ],
     )
-    _check_work(scenario, len(policies), runs, run_offset)
+    drawn = (snapshot, animation, trajectories_out, mcap)
+    if mcap is not None:
+        require_rosbags()  # the missing extra is named before any work
+    recorded = any(path is not None for path in drawn)
+    _check_work(scenario, len(policies), runs, run_offset, record=recorded)
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()
     show = sys.stderr.isatty() if progress is None else progress
@@ -335,7 +360,7 @@ def simulate_cmd(
         if event_table is not None:
             write_event_table(table, stage.path(event_table))
             notes.append(f"event table ({len(table)} rows): {event_table}")
-        if snapshot is not None or animation is not None or trajectories_out is not None:
+        if recorded:
             notes += _draw(
                 scenario,
                 policies,
@@ -344,6 +369,7 @@ def simulate_cmd(
                 snapshot_path=snapshot,
                 animation_path=animation,
                 trajectories_path=trajectories_out,
+                mcap_path=mcap,
                 stage=stage,
                 controller=controller,
             )

@@ -1,4 +1,4 @@
-"""``swarmtag tag encode|decode|render`` (the payload, the E-ink picture); keygen and scan join."""
+"""``swarmtag tag encode|decode|render`` (payload, E-ink picture); keygen/scan/write/emulate too."""
 
 from __future__ import annotations
 
@@ -10,20 +10,13 @@ from pathlib import Path
 import click
 
 from swarmtag._outputs import OutputPlan
-from swarmtag.errors import FieldRangeError, PayloadError
+from swarmtag.cli._tag_options import status
+from swarmtag.errors import PayloadError
 from swarmtag.tag import COMPANY_ID, TagState, TagStatus, decode, encode
 
 __all__ = ["tag"]
 
 _SEPARATORS = str.maketrans("", "", ":- \t")
-
-
-def _status(_ctx: click.Context, _param: click.Parameter, value: str) -> TagStatus:
-    """Parse ``--status`` by name in any case (``awaiting_pickup``) or number (0-2)."""
-    try:
-        return TagStatus.parse(value)
-    except FieldRangeError as error:
-        raise click.BadParameter(str(error).removeprefix("status: ")) from None
 
 
 def parse_hex(text: str) -> bytes:
@@ -42,7 +35,7 @@ def _state_options(command: Callable[..., None]) -> Callable[..., None]:
             "--status",
             required=True,
             metavar="STATUS",
-            callback=_status,
+            callback=status,
             help="idle, awaiting_pickup or picked_up (any case), or 0-2.",
         ),
         click.option(
@@ -59,7 +52,7 @@ def _state_options(command: Callable[..., None]) -> Callable[..., None]:
 
 @click.group()
 def tag() -> None:
-    """The smart tag: its 6-byte payload, its E-ink picture, site key files, scanning."""
+    """The smart tag: its payload, its E-ink picture, site key files, scanning, a software tag."""
 
 
 @tag.command("encode")
@@ -113,8 +106,12 @@ def render_cmd(urgency: int, status: TagStatus, destination: int, marker: int, o
     click.echo(f"wrote E-ink picture: {out}")
 
 
+from swarmtag.cli.tag_emulate import emulate_cmd  # noqa: E402 - a command of this group, in its module
 from swarmtag.cli.tag_keys import keygen_cmd  # noqa: E402 - a command of this group, in its module
 from swarmtag.cli.tag_scan import scan_cmd  # noqa: E402 - a command of this group, in its module
+from swarmtag.cli.tag_write import write_cmd  # noqa: E402 - a command of this group, in its module
 
+tag.add_command(emulate_cmd)
 tag.add_command(keygen_cmd)
 tag.add_command(scan_cmd)
+tag.add_command(write_cmd)

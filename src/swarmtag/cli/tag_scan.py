@@ -4,14 +4,14 @@ The scan runs on the ``bleak`` backend (the ``ble`` extra). It ends after
 ``--timeout`` seconds, or on Ctrl-C: then the table of what was seen is
 still printed, and the command exits 130 as every interrupted command does.
 A radio that cannot be used (no adapter, no BlueZ, no permission) is one
-line saying what is missing, exit 2. The hidden ``--backend sim`` hears a
+line saying what is missing, exit 2. ``--adapter hci1`` picks a BlueZ
+adapter (the simulated radio has none and ignores it). The hidden ``--backend sim`` hears a
 bench of simulated tags, for demos and for tests that must not touch a radio.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import time
 
 import click
@@ -19,6 +19,7 @@ from rich.table import Table
 
 from swarmtag._interrupt import acknowledge, checkpoint
 from swarmtag.cli._console import make_console
+from swarmtag.cli._tag_options import adapter, seconds_between
 from swarmtag.tag.backends import Scanner, Sighting, open_scanner
 
 __all__ = ["scan_cmd"]
@@ -29,20 +30,13 @@ MAX_TIMEOUT = 86400.0
 """The longest scan asked for in one command: a day."""
 
 
-def _seconds(_ctx: click.Context, _param: click.Parameter, value: float) -> float:
-    """Refuse NaN, infinities and negative or absurd timeouts (click's FloatRange lets NaN in)."""
-    if not (math.isfinite(value) and 0.0 <= value <= MAX_TIMEOUT):
-        raise click.BadParameter(f"{value!r} is not a number of seconds in 0-{MAX_TIMEOUT:g}")
-    return value
-
-
-def _open(backend: str) -> Scanner:
-    """The scanner behind ``--backend`` (tests replace this function)."""
+def _open(backend: str, adapter: str | None) -> Scanner:
+    """The scanner behind ``--backend`` on ``adapter`` (tests replace this function)."""
     if backend == "sim":
         from swarmtag.tag.backends.sim import bench_tags  # noqa: PLC0415 - only for --backend sim
 
         return open_scanner("sim", tags=bench_tags())
-    return open_scanner(backend)
+    return open_scanner(backend, adapter=adapter)
 
 
 def _listen(scanner: Scanner, timeout: float) -> bool:
@@ -92,19 +86,25 @@ def _table(rows: list[dict[str, object]]) -> Table:
     type=float,
     default=10.0,
     show_default=True,
-    callback=_seconds,
+    callback=seconds_between(0.0, MAX_TIMEOUT),
     metavar="S",
     help="Seconds to listen; Ctrl-C ends sooner (the table is still shown).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of a table.")
+@click.option(
+    "--adapter",
+    metavar="hciN",
+    callback=adapter,
+    help="The BlueZ adapter to scan with (default: the system's first).",
+)
 @click.option("--backend", type=click.Choice(["bleak", "sim"]), default="bleak", hidden=True)
-def scan_cmd(timeout: float, *, as_json: bool, backend: str) -> None:
+def scan_cmd(timeout: float, *, as_json: bool, adapter: str | None, backend: str) -> None:
     """Listen for swarmtag tags, then list each one in range (needs the ble extra).
 
     Shows marker, urgency, status, destination, RSSI and the age of the last
     advertisement heard from each carrier; other BLE devices are ignored.
     """
-    scanner = _open(backend)
+    scanner = _open(backend, adapter)
     interrupted = _listen(scanner, timeout)
     if scanner.failure is not None:
         raise scanner.failure

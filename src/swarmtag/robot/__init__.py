@@ -4,6 +4,8 @@
   (``swarmtag.robot.io``); the simulator offers one view per robot, a real
   robot its drivers (docs/controller.md);
 - ``ControllerConfig``: the mission rules and site geometry;
+- ``TagCache`` / ``tag_states``: a BLE scanner's sightings as the
+  ``tag_states`` sensor (``swarmtag.robot.tag_cache``);
 - ``create_tree`` and the subtree factories (py_trees, the ``robot``
   extra): SPEC §3.2 as a behaviour tree;
 - ``TreeController``: every simulated robot under its own tree
@@ -29,6 +31,7 @@ from swarmtag.robot.io import (
     RobotIO,
     TagStates,
 )
+from swarmtag.robot.tag_cache import TagCache, tag_states
 
 if TYPE_CHECKING:
     from swarmtag.robot.conformance import Divergence, check_controller
@@ -45,6 +48,7 @@ __all__ = [
     "RandomDraws",
     "Report",
     "RobotIO",
+    "TagCache",
     "TagStates",
     "TreeController",
     "TreeFactory",
@@ -52,6 +56,7 @@ __all__ = [
     "check_controller",
     "create_tree",
     "dot_picture",
+    "tag_states",
 ]
 
 _LAZY = {

@@ -19,7 +19,14 @@ from swarmtag.tag.codec import (
 )
 from swarmtag.tag.filestore import FileStore
 from swarmtag.tag.gatt import ATT_ERRORS, SERVICE_UUID, STATE_CHAR_UUID, WRITE_CHAR_UUID
-from swarmtag.tag.keys import derive_role_key, generate_site_key, read_key_file, write_key_file
+from swarmtag.tag.keys import (
+    derive_role_key,
+    generate_site_key,
+    read_key_file,
+    read_role_key_file,
+    write_key_file,
+    write_role_key_file,
+)
 from swarmtag.tag.lifecycle import ROBOT_TRANSITIONS, Change, Role, apply_change
 from swarmtag.tag.model import MemoryStore, TagModel, TagStore
 from swarmtag.tag.record import MAX_WRITERS, TagRecord
@@ -69,7 +76,9 @@ __all__ = [
     "encode_manufacturer_data",
     "generate_site_key",
     "read_key_file",
+    "read_role_key_file",
     "sign",
     "verify",
     "write_key_file",
+    "write_role_key_file",
 ]

@@ -1,4 +1,4 @@
-"""Site keys, the role keys derived from them, and the site key file.
+"""Site keys, the role keys derived from them, and their key files.
 
 Who holds what: a *tag* holds the site key; a *writer* holds only the key of
 its role, ``derive_role_key(site_key, role)``. A tag recomputes the role key
@@ -20,9 +20,15 @@ exactly two lines, each ending in a line feed::
     swarmtag-site-key-v1
     <64 hex digits: the 32-byte site key>
 
-It is created with mode 0600 and refused when group or others have any
-access to it, like an ssh private key. Errors are ``KeyFileError`` and name
-the file, never its content.
+A role key file (``write_role_key_file``, ``read_role_key_file``) is the
+same, with the header ``swarmtag-robot-key-v1`` or ``swarmtag-operator-key-v1``
+and the 32-byte role key: it is what a writer's machine holds. Each reader
+refuses the other kind by name (a site key on a robot would undo the role
+separation; a role key on a tag verifies nothing).
+
+Key files are created with mode 0600 and refused when group or others have
+any access to them, like an ssh private key. Errors are ``KeyFileError`` and
+name the file, never its content.
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ __all__ = [
     "HKDF_SALT",
     "KEY_FILE_HEADER",
     "MIN_KEY_LENGTH",
+    "ROLE_KEY_FILE_HEADERS",
     "ROLE_KEY_INFO",
     "ROLE_KEY_LENGTH",
     "SITE_KEY_LENGTH",
@@ -57,7 +64,9 @@ __all__ = [
     "generate_site_key",
     "hkdf_sha256",
     "read_key_file",
+    "read_role_key_file",
     "write_key_file",
+    "write_role_key_file",
 ]
 
 MIN_KEY_LENGTH: Final = 16
@@ -77,6 +86,10 @@ ROLE_KEY_INFO: Final = MappingProxyType(
 """The HKDF ``info`` string of each role (ASCII, no terminator)."""
 KEY_FILE_HEADER: Final = "swarmtag-site-key-v1"
 """First line of a site key file."""
+ROLE_KEY_FILE_HEADERS: Final = MappingProxyType(
+    {Role.ROBOT: "swarmtag-robot-key-v1", Role.OPERATOR: "swarmtag-operator-key-v1"}
+)
+"""First line of a role key file, by role."""
 
 _HASH_LENGTH: Final = 32
 _MAX_FILE_BYTES: Final = 4096
@@ -85,6 +98,12 @@ _FORMAT_HINT: Final = (
     f"expected the line {KEY_FILE_HEADER!r}, then a line of {2 * SITE_KEY_LENGTH} hex digits "
     "(make one with 'swarmtag tag keygen --out FILE')"
 )
+_ROLE_FORMAT_HINT: Final = (
+    f"expected the line {ROLE_KEY_FILE_HEADERS[Role.ROBOT]!r} or "
+    f"{ROLE_KEY_FILE_HEADERS[Role.OPERATOR]!r}, then a line of {2 * ROLE_KEY_LENGTH} hex digits "
+    "(derive one with 'swarmtag tag keygen --role robot|operator --from SITE.key --out FILE')"
+)
+_ROLE_BY_HEADER: Final = {header: role for role, header in ROLE_KEY_FILE_HEADERS.items()}
 
 
 def check_site_key(key: object) -> bytes:
@@ -153,17 +172,30 @@ def write_key_file(path: str | os.PathLike[str], key: bytes) -> Path:
     folder. The file appears complete or not at all (temporary file, fsync,
     hard link into place, which fails if the name was taken meanwhile).
     """
+    return _write(path, KEY_FILE_HEADER, key, SITE_KEY_LENGTH)
+
+
+def write_role_key_file(path: str | os.PathLike[str], role: object, key: bytes) -> Path:
+    """Save the 32-byte key of ``role`` to a new role key file ``path`` (mode 0600).
+
+    ``key`` is ``derive_role_key(site_key, role)``; the same rules as
+    ``write_key_file`` apply (never overwrites, complete or absent).
+    """
+    header = ROLE_KEY_FILE_HEADERS[check_role(role)]
+    return _write(path, header, key, ROLE_KEY_LENGTH)
+
+
+def _write(path: str | os.PathLike[str], header: str, key: bytes, length: int) -> Path:
+    """Create the key file ``path``: ``header``, then ``key`` (``length`` bytes) in hex."""
     target = as_path(path, what="key file path", error=KeyFileError)
     data = as_bytes("key", key, FieldRangeError)
-    if len(data) != SITE_KEY_LENGTH:
-        raise FieldRangeError(
-            f"key: a key file holds a {SITE_KEY_LENGTH}-byte key, got {len(data)}"
-        )
+    if len(data) != length:
+        raise FieldRangeError(f"key: a key file holds a {length}-byte key, got {len(data)}")
     if not os.path.isdir(target.parent):  # noqa: PTH112 - Path.is_dir raises ENAMETOOLONG
         raise KeyFileError(f"cannot write key file {target}: folder {target.parent} does not exist")
     if os.path.lexists(target):
         raise KeyFileError(f"key file {target} already exists; refusing to overwrite a key")
-    text = f"{KEY_FILE_HEADER}\n{data.hex()}\n".encode("ascii")
+    text = f"{header}\n{data.hex()}\n".encode("ascii")
     temp = target.parent / f".{target.name}.{secrets.token_hex(6)}.tmp"
     try:
         _write_private(temp, text)
@@ -199,8 +231,44 @@ def read_key_file(path: str | os.PathLike[str]) -> bytes:
     """The site key in the key file ``path``; ``KeyFileError`` if it is missing, shared or bad.
 
     On POSIX systems the file must give group and others no access at all
-    (``chmod 600``): a key others can read is no longer a secret.
+    (``chmod 600``): a key others can read is no longer a secret. A role key
+    file is refused by name: a tag needs the site key.
     """
+    target, header, digits = _read(path)
+    role = _ROLE_BY_HEADER.get(header)
+    if role is not None:
+        raise KeyFileError(
+            f"key file {target} is a {role.name.lower()} key file, not a site key file: a tag "
+            "holds the site key (made by 'swarmtag tag keygen --out FILE'), writers their role key"
+        )
+    if header != KEY_FILE_HEADER or not _is_hex(digits, SITE_KEY_LENGTH):
+        raise KeyFileError(f"key file {target} is not a swarmtag site key file: {_FORMAT_HINT}")
+    return bytes.fromhex(digits)
+
+
+def read_role_key_file(path: str | os.PathLike[str]) -> tuple[Role, bytes]:
+    """The role and the role key in the role key file ``path``; ``KeyFileError`` if unusable.
+
+    The same rules as ``read_key_file`` apply. The site key file is refused by
+    name: a writer's machine must hold only its role's key.
+    """
+    target, header, digits = _read(path)
+    if header == KEY_FILE_HEADER:
+        raise KeyFileError(
+            f"key file {target} is the site key file, not a role key file: a writer holds only "
+            f"its role's key; derive one with 'swarmtag tag keygen --role robot|operator --from "
+            f"{target} --out ROLE.key'"
+        )
+    role = _ROLE_BY_HEADER.get(header)
+    if role is None or not _is_hex(digits, ROLE_KEY_LENGTH):
+        raise KeyFileError(
+            f"key file {target} is not a swarmtag role key file: {_ROLE_FORMAT_HINT}"
+        )
+    return role, bytes.fromhex(digits)
+
+
+def _read(path: str | os.PathLike[str]) -> tuple[Path, str, str]:
+    """A private key file's path, header line and key line; refuses anything unsafe to read."""
     target = as_path(path, what="key file path", error=KeyFileError)
     try:
         fd = os.open(target, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))  # a FIFO cannot hang us
@@ -216,27 +284,20 @@ def read_key_file(path: str | os.PathLike[str]) -> bytes:
         if os.name == "posix" and mode & _PRIVATE_BITS:
             raise KeyFileError(
                 f"key file {target} is accessible to other users (mode {mode:04o}); "
-                f"a site key must be private: run 'chmod 600 {target}'"
+                f"a key must be private: run 'chmod 600 {target}'"
             )
         data = os.read(fd, _MAX_FILE_BYTES + 1)
     except OSError as error:
         raise _failed(target, "read", error) from None
     finally:
         os.close(fd)
-    return _parse(target, data)
-
-
-def _parse(target: Path, data: bytes) -> bytes:
-    """The key in a key file's bytes; one message for any bad content, never showing it."""
     header, _, rest = data.partition(b"\n")
     line, newline, tail = rest.partition(b"\n")
-    digits = line.decode("ascii", "replace")
-    if (
-        header != KEY_FILE_HEADER.encode("ascii")
-        or not newline
-        or tail
-        or len(digits) != 2 * SITE_KEY_LENGTH
-        or any(char not in string.hexdigits for char in digits)
-    ):
-        raise KeyFileError(f"key file {target} is not a swarmtag site key file: {_FORMAT_HINT}")
-    return bytes.fromhex(digits)
+    if not newline or tail:
+        return target, "", ""  # not two lines: no header can match
+    return target, header.decode("ascii", "replace"), line.decode("ascii", "replace")
+
+
+def _is_hex(digits: str, length: int) -> bool:
+    """Whether ``digits`` is exactly ``length`` bytes in hex (never shown in a message)."""
+    return len(digits) == 2 * length and all(char in string.hexdigits for char in digits)

@@ -12,6 +12,7 @@ injected clock and the ``ScanFilter`` counters, so a backend only has to call
 from __future__ import annotations
 
 import math
+import re
 import threading
 import time
 from abc import ABC, abstractmethod
@@ -25,7 +26,15 @@ from swarmtag.errors import ConfigError, RadioError
 from swarmtag.tag.codec import TagState
 from swarmtag.tag.scan import ScanFilter
 
-__all__ = ["DEFAULT_MAX_AGE", "Scanner", "Sighting", "TagTable", "check_seconds"]
+__all__ = [
+    "DEFAULT_MAX_AGE",
+    "Scanner",
+    "Sighting",
+    "TagTable",
+    "check_adapter",
+    "check_address",
+    "check_seconds",
+]
 
 DEFAULT_MAX_AGE: Final = 5.0
 """Seconds after which a carrier not heard again is dropped: 20 adverts at the default 250 ms."""
@@ -39,6 +48,41 @@ def check_seconds(name: str, value: object, *, low: float = 0.0, high: float = 3
     if not (math.isfinite(seconds) and low <= seconds <= high):
         raise ConfigError(f"{name}: {value!r} is not a number in {low:g}-{high:g}")
     return seconds
+
+
+def check_address(address: object) -> str:
+    """``address`` if it is a Bluetooth address (``AA:BB:CC:DD:EE:FF``) or a macOS device UUID.
+
+    >>> check_address("c4:7f:0e:12:34:56")
+    'C4:7F:0E:12:34:56'
+    """
+    if isinstance(address, str):
+        if re.fullmatch(r"[0-9A-Fa-f]{2}(:[0-9A-Fa-f]{2}){5}", address):
+            return address.upper()
+        if re.fullmatch(r"[0-9A-Fa-f]{8}(-[0-9A-Fa-f]{4}){3}-[0-9A-Fa-f]{12}", address):
+            return address.upper()  # CoreBluetooth names devices by UUID, not address
+    shown = repr(address)[:60]
+    raise ConfigError(
+        f"address: {shown} is not a Bluetooth address such as AA:BB:CC:DD:EE:FF (or, on macOS, "
+        "a device UUID); 'swarmtag tag scan' lists the tags' addresses"
+    )
+
+
+def check_adapter(adapter: object) -> str | None:
+    """``adapter`` if it names a BlueZ adapter (``hci0``, ``hci1``, ...) or is ``None`` (default).
+
+    >>> check_adapter("hci1")
+    'hci1'
+    """
+    if adapter is None:
+        return None
+    if not isinstance(adapter, str) or not re.fullmatch(r"hci[0-9]{1,3}", adapter):
+        shown = repr(adapter)[:40]
+        raise ConfigError(
+            f"adapter: {shown} is not a BlueZ adapter name such as hci0 or hci1 "
+            "('bluetoothctl list' shows the adapters)"
+        )
+    return adapter
 
 
 @dataclass(frozen=True, slots=True)

@@ -12,12 +12,15 @@ Adapter errors (``BleakError``, ``OSError``) are logged and retried up to
 (no adapter, BlueZ not running, permission denied) end the scan at once.
 Either way ``failure`` then holds a ``RadioError`` whose message says what
 is missing and how to get it. ``scanner_factory`` replaces ``BleakScanner``
-(tests inject a fake class that raises).
+(tests inject a fake class that raises). ``adapter="hci1"`` picks a BlueZ
+adapter (``adapter_options`` says it the way the installed bleak takes it);
+the default is the system's first adapter.
 """
 
 from __future__ import annotations
 
 import asyncio
+import importlib
 import logging
 import threading
 import time
@@ -30,9 +33,9 @@ from bleak.backends.scanner import AdvertisementData
 from bleak.exc import BleakDBusError, BleakError
 
 from swarmtag.errors import ConfigError, RadioError
-from swarmtag.tag.backends.base import DEFAULT_MAX_AGE, Scanner, check_seconds
+from swarmtag.tag.backends.base import DEFAULT_MAX_AGE, Scanner, check_adapter, check_seconds
 
-__all__ = ["BleakTagScanner", "explain"]
+__all__ = ["BleakTagScanner", "adapter_options", "explain"]
 
 _LOG = logging.getLogger(__name__)
 _LOG.addHandler(logging.NullHandler())  # a library: the application decides what is shown
@@ -65,6 +68,8 @@ def explain(error: BaseException) -> str:  # noqa: PLR0911 - one return per caus
         return f"no Bluetooth LE adapter available ({error}): plug one in, or {_INSTALL_BLUEZ}"
     if "no bluetooth adapters found" in text:
         return "no Bluetooth adapter found: plug in a BLE adapter and check 'bluetoothctl list'"
+    if text.startswith("adapter '") and text.endswith("' not found"):
+        return f"no Bluetooth {error}: 'bluetoothctl list' shows the adapters there are"
     if isinstance(error, FileNotFoundError) or dbus.endswith(("ServiceUnknown", "NoServer")):
         return f"BlueZ is not reachable (no D-Bus system bus or bluetoothd): {_INSTALL_BLUEZ}"
     if isinstance(error, PermissionError) or dbus.endswith("AccessDenied"):
@@ -81,9 +86,30 @@ def _permanent(error: BaseException) -> bool:
     if isinstance(error, FileNotFoundError | PermissionError):
         return True
     dbus = error.dbus_error if isinstance(error, BleakDBusError) else ""
-    return "no bluetooth adapters found" in str(error).lower() or dbus.endswith(
-        ("ServiceUnknown", "NoServer", "AccessDenied")
+    text = str(error).lower()
+    return (
+        "no bluetooth adapters found" in text
+        or (text.startswith("adapter '") and text.endswith("' not found"))
+        or dbus.endswith(("ServiceUnknown", "NoServer", "AccessDenied"))
     )
+
+
+def adapter_options(adapter: str | None, *, client: bool = False) -> dict[str, Any]:
+    """The keyword arguments that make bleak use the BlueZ ``adapter`` (``{}`` for the default).
+
+    bleak >= 3.0 takes ``bluez={"adapter": ...}`` and deprecates the plain
+    ``adapter=`` keyword that older versions read; other platforms ignore both.
+    """
+    if check_adapter(adapter) is None:
+        return {}
+    try:
+        bluez_args = importlib.import_module("bleak.args.bluez")  # bleak >= 1.0 only
+    except ImportError:
+        return {"adapter": adapter}
+    typed = getattr(bluez_args, "BlueZClientArgs" if client else "BlueZScannerArgs", None)
+    if "adapter" in getattr(typed, "__annotations__", {}):
+        return {"bluez": {"adapter": adapter}}
+    return {"adapter": adapter}
 
 
 class BleakTagScanner(Scanner):
@@ -97,6 +123,7 @@ class BleakTagScanner(Scanner):
         retries: int = 3,
         backoff: float = 0.5,
         scanning_mode: str = "active",
+        adapter: str | None = None,
         scanner_factory: Callable[..., _BleakScannerLike] | None = None,
         join_timeout: float = 10.0,
         max_age: float = DEFAULT_MAX_AGE,
@@ -111,6 +138,7 @@ class BleakTagScanner(Scanner):
         self.backoff = check_seconds("backoff", backoff, high=60.0)
         self.join_timeout = check_seconds("join_timeout", join_timeout, high=600.0)
         self.scanning_mode = scanning_mode
+        self.adapter = check_adapter(adapter)
         self._factory: Callable[..., _BleakScannerLike] = scanner_factory or bleak.BleakScanner
         self._stop = threading.Event()
         self._scanning = threading.Event()
@@ -192,6 +220,7 @@ class BleakTagScanner(Scanner):
     async def _scan_once(self) -> None:
         """One bleak scanner from start to the stop flag."""
         options: dict[str, Any] = {"scanning_mode": self.scanning_mode}
+        options.update(adapter_options(self.adapter))
         scanner = self._factory(detection_callback=self.detection_callback, **options)
         await scanner.start()
         self._scanning.set()

@@ -1,0 +1,232 @@
+"""``swarmtag aruco render|detect``: a synthetic photo and what the detector reads from it."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import pytest
+
+from swarmtag.cli import main
+from swarmtag.perception import NEEDS_EXTRA, rig_path
+
+pytest.importorskip("cv2")
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    with pytest.raises(SystemExit) as exited:
+        main(list(argv))
+    out, err = capsys.readouterr()
+    return int(exited.value.code or 0), out, err
+
+
+def render(capsys, path, *extra: str) -> None:
+    code, out, err = run(
+        capsys,
+        "aruco",
+        "render",
+        "--marker",
+        "12",
+        "--distance",
+        "1.5",
+        "--bearing",
+        "20",
+        "--out",
+        str(path),
+        *extra,
+    )
+    assert (code, err) == (0, ""), err
+    assert out.startswith(f"wrote camera image: {path} (camera front, 1920x1080; marker 12")
+
+
+def test_render_then_detect_gives_back_id_distance_and_bearing(capsys, tmp_path):
+    image = tmp_path / "photo.png"
+    render(capsys, image, "--turn", "15", "--blur", "0.5", "--noise", "2", "--seed", "3")
+    assert image.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    code, out, err = run(capsys, "aruco", "detect", str(image), "--json")
+    assert (code, err) == (0, "")
+    report = json.loads(out)
+    assert report["camera"] == "front"
+    assert {m["id"] for m in report["markers"]} == {12}
+    (carrier,) = report["carriers"]
+    assert carrier["id"] == 12
+    assert carrier["distance"] == pytest.approx(1.5, rel=0.03)
+    # one marker from afar: its face may be the mirror image, which moves the carrier sideways
+    assert carrier["bearing"] == pytest.approx(20.0, abs=5.0)
+    assert report["centring"] is None
+    # the carrier's faces point at 215 deg + k 90 (robot frame); heading 55 puts them on the axes
+    code, out, _ = run(capsys, "aruco", "detect", str(image), "--heading", "55", "--json")
+    squared = json.loads(out)["carriers"][0]
+    assert squared["bearing"] == pytest.approx(20.0, abs=0.5)
+    assert squared["yaw"] % 90 == pytest.approx(35.0, abs=1e-6)
+    assert squared["predock"]["face"] == "south"  # 215 + 55 = 270 deg in the world
+    code, out, _ = run(capsys, "aruco", "detect", str(image))
+    assert code == 0
+    lines = out.splitlines()
+    assert lines[0] == "camera front: 1 marker(s), 1 carrier(s)"
+    assert lines[2].split()[:2] == ["12", f"{carrier['distance']:.3f}"]
+
+
+def test_the_upward_view_reports_the_centring_offset(capsys, tmp_path):
+    image = tmp_path / "under.png"
+    code, _, err = run(
+        capsys,
+        "aruco",
+        "render",
+        "--marker",
+        "4",
+        "--distance",
+        "0.03",
+        "--bearing",
+        "0",
+        "--view",
+        "upward",
+        "--out",
+        str(image),
+    )
+    assert (code, err) == (0, "")
+    code, out, _ = run(capsys, "aruco", "detect", str(image), "--view", "upward", "--json")
+    centring = json.loads(out)["centring"]
+    assert centring["id"] == 4
+    assert centring["offset"] == pytest.approx([0.03, 0.0], abs=0.002)
+    assert centring["centred"] is False
+    code, out, _ = run(capsys, "aruco", "detect", str(image), "--view", "upward")
+    assert "centring on 4: move (+3.0, +0.0) cm" in out
+
+
+def test_a_camera_file_is_read_and_a_photo_of_another_size_refused(capsys, tmp_path):
+    small = tmp_path / "small.toml"
+    text = rig_path("dots-like").read_text().replace("width = 1920", "width = 640")
+    small.write_text(text.replace("height = 1080", "height = 480"))
+    image = tmp_path / "small.png"
+    code, out, err = run(
+        capsys,
+        "aruco",
+        "render",
+        "--marker",
+        "1",
+        "--distance",
+        "0.8",
+        "--bearing",
+        "-90",
+        "--camera",
+        str(small),
+        "--out",
+        str(image),
+    )
+    assert (code, err) == (0, "")
+    assert "camera right, 640x480" in out
+    code, out, err = run(
+        capsys, "aruco", "detect", str(image), "--camera", str(small), "--view", "right", "--json"
+    )
+    assert code == 0
+    assert json.loads(out)["carriers"][0]["id"] == 1
+    code, _, err = run(capsys, "aruco", "detect", str(image))
+    assert code == 2
+    assert err == (
+        "swarmtag: error: image is 640x480 but camera 'front' is 1920x1080; "
+        "give the camera file of the camera that took it\n"
+    )
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (["detect", "{tmp}/none.png"], "no such image"),
+        (["detect", "{tmp}/text.png"], "not an image OpenCV can read"),
+        (["detect", "{tmp}"], "is a folder"),
+        (["detect", "{tmp}/text.png", "--camera", "nope"], "no such file or shipped rig"),
+        (["detect", "{tmp}/text.png", "--view", "side"], "has no camera 'side'"),
+        (["detect", "{tmp}/text.png", "--heading", "nan"], "--heading"),
+        (
+            [
+                "render",
+                "--marker",
+                "250",
+                "--distance",
+                "1",
+                "--bearing",
+                "0",
+                "--out",
+                "{tmp}/a.png",
+            ],
+            "250 is not in the range 0<=x<=249",
+        ),
+        (
+            [
+                "render",
+                "--marker",
+                "1",
+                "--distance",
+                "inf",
+                "--bearing",
+                "0",
+                "--out",
+                "{tmp}/a.png",
+            ],
+            "--distance",
+        ),
+        (
+            [
+                "render",
+                "--marker",
+                "1",
+                "--distance",
+                "1",
+                "--bearing",
+                "0",
+                "--occlusion",
+                "2",
+                "--out",
+                "{tmp}/a.png",
+            ],
+            "occlusion",
+        ),
+        (
+            [
+                "render",
+                "--marker",
+                "1",
+                "--distance",
+                "1",
+                "--bearing",
+                "0",
+                "--out",
+                "{tmp}/a.jpg",
+            ],
+            "--out",
+        ),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, tmp_path, argv, words):
+    (tmp_path / "text.png").write_text("not a picture")
+    code, _out, err = run(capsys, "aruco", *[a.format(tmp=tmp_path) for a in argv])
+    assert code == 2
+    assert err.startswith("swarmtag: error: ")
+    assert err.count("\n") == 1
+    assert words in err
+    assert not (tmp_path / "a.png").exists()
+
+
+def test_missing_opencv_is_one_line_naming_the_extra(capsys, tmp_path, monkeypatch):
+    image = tmp_path / "photo.png"
+    render(capsys, image)
+    monkeypatch.setitem(sys.modules, "cv2", None)
+    for argv in (
+        ["detect", str(image)],
+        [
+            "render",
+            "--marker",
+            "1",
+            "--distance",
+            "1",
+            "--bearing",
+            "0",
+            "--out",
+            str(tmp_path / "b.png"),
+        ],
+    ):
+        code, out, err = run(capsys, "aruco", *argv)
+        assert (code, out) == (2, "")
+        assert err == f"swarmtag: error: {NEEDS_EXTRA}\n"
+    assert not (tmp_path / "b.png").exists()
