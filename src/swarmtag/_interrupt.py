@@ -76,7 +76,11 @@ def _watch(thread: int) -> None:
         if not _handling_interrupt(thread):
             # Lost (swallowed inside a library) or not yet seen: raise it again. A real
             # signal, not interrupt_main(), so that a blocking call in the main thread wakes.
-            signal.pthread_kill(thread, signal.SIGINT)
+            try:
+                signal.pthread_kill(thread, signal.SIGINT)
+            except OSError:  # the main thread is gone: the process is ending anyway
+                _state["watching"] = False
+                return
 
 
 def acknowledge() -> None:
