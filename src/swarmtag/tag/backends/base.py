@@ -28,6 +28,7 @@ from swarmtag.tag.scan import ScanFilter
 
 __all__ = [
     "DEFAULT_MAX_AGE",
+    "Running",
     "Scanner",
     "Sighting",
     "TagTable",
@@ -143,7 +144,31 @@ class TagTable:
         return dict(sorted(self._latest.items()))
 
 
-class Scanner(ABC):
+class Running(ABC):
+    """Something started and stopped around a ``with`` block: scanners and tag servers."""
+
+    @abstractmethod
+    def start(self) -> None:
+        """Begin (returns at once)."""
+
+    @abstractmethod
+    def stop(self) -> None:
+        """End and release the radio."""
+
+    def __enter__(self) -> Self:
+        self.start()
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.stop()
+
+
+class Scanner(Running):
     """A running source of tag sightings; use as ``with open_scanner(...) as scanner:``.
 
     Subclasses implement ``start``/``stop`` and call ``_receive`` (from any
@@ -173,7 +198,7 @@ class Scanner(ABC):
     def stop(self) -> None:
         """Stop listening and release the radio; the sightings held so far stay readable."""
 
-    def poll(self) -> None:  # noqa: B027 - an optional hook: threaded backends need none
+    def poll(self) -> None:
         """Catch up to the clock, for backends without a thread of their own (none by default)."""
 
     @property
@@ -233,15 +258,3 @@ class Scanner(ABC):
             sighting = Sighting(state.marker, state, int(rssi), when, str(address))
             self._table.update(sighting)
             return sighting
-
-    def __enter__(self) -> Self:
-        self.start()
-        return self
-
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        value: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.stop()

@@ -15,20 +15,20 @@ without a radio) and unit tests. The ``bless`` backend serves over BLE.
 from __future__ import annotations
 
 import threading
-from abc import ABC, abstractmethod
+from abc import abstractmethod
 from collections import deque
 from collections.abc import Iterable
-from types import TracebackType
-from typing import ClassVar, Self
+from typing import ClassVar
 
 from swarmtag.errors import FieldRangeError, StateRecordError, SwarmtagError
 from swarmtag.tag._arguments import as_bytes, check_type
+from swarmtag.tag.backends.base import Running
 from swarmtag.tag.emulator import SoftwareTag, WriteOutcome
 
 __all__ = ["ReplayTagServer", "TagServer"]
 
 
-class TagServer(ABC):
+class TagServer(Running):
     """A running transport for one software tag; use as ``with server:``.
 
     ``outcomes()`` hands over the writes served since the last call, in
@@ -53,7 +53,7 @@ class TagServer(ABC):
     def stop(self) -> None:
         """Stop serving and release the radio; the tag keeps its state and store."""
 
-    def poll(self) -> None:  # noqa: B027 - an optional hook: threaded backends need none
+    def poll(self) -> None:
         """Serve what is due now, for backends without a thread of their own."""
 
     @property
@@ -95,18 +95,6 @@ class TagServer(ABC):
                 return None
             self._outcomes.append(outcome)
             return outcome
-
-    def __enter__(self) -> Self:
-        self.start()
-        return self
-
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        value: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.stop()
 
 
 class ReplayTagServer(TagServer):
