@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from swarmtag.perception import (
+    LOOSE_RATE,
+    MIN_RATE,
     Conditions,
     Nuisance,
     Placement,
@@ -119,7 +121,7 @@ def main() -> None:
     study.save_json(args.out / "range.json")
     examples(rig, args.out / "examples.png", args.seed)
     print(study.table())
-    for rate in (0.95, 1.0):
+    for rate in (MIN_RATE, LOOSE_RATE):  # the reliable range, then the looser one to compare
         band = study.reliable_range(min_rate=rate)
         images, found, worst = study.inside(min_rate=rate)
         print(

@@ -7,6 +7,8 @@ import pytest
 
 from swarmtag.errors import PerceptionError
 from swarmtag.perception import (
+    LOOSE_RATE,
+    MIN_RATE,
     Nuisance,
     RangeStudy,
     load_rig,
@@ -17,7 +19,7 @@ from swarmtag.perception import (
 pytest.importorskip("cv2")
 
 RIG = load_rig()
-RELIABLE = (1.25, 2.0)
+RELIABLE = (1.25, 2.5)
 """The dots-like rig's reliable range as docs/perception.md reports it (from
 benchmarks/camera_range.py, 40 images per point): keep the two in step."""
 
@@ -58,6 +60,35 @@ def test_error_beyond_five_percent_is_not_reliable():
     assert study.reliable_range() == (1.0, 1.0)
     assert study.error_quantile()[1, 0] == pytest.approx(0.06)
     assert "✗" in study.table().splitlines()[3]
+
+
+def test_the_reliable_range_needs_every_image_and_the_95_percent_band_is_kept_to_compare():
+    detected = np.ones((3, 2, 20), dtype=bool)
+    error = np.full(detected.shape, 0.01)
+    detected[2, 1, 0] = False  # one miss in 20 (95 %) at the farthest distance
+    error[2, 1, 0] = np.nan
+    study = RangeStudy(
+        "made",
+        np.array([1.0, 2.0, 3.0]),
+        np.array([0.0, 45.0]),
+        detected,
+        error,
+        np.zeros_like(detected),
+        0,
+        Nuisance(),
+    )
+    assert MIN_RATE == 1.0
+    assert study.reliable_range() == (1.0, 2.0)
+    assert study.reliable_range(min_rate=LOOSE_RATE) == (1.0, 3.0)
+    assert study.inside() == (80, 80, 0.01)
+    mapping = study.to_mapping()
+    assert mapping["reliable_range"] == [1.0, 2.0]
+    assert mapping["reliable_range_95"] == [1.0, 3.0]
+    assert mapping["inside_reliable_range"] == {
+        "images": 80,
+        "detected": 80,
+        "largest_error": 0.01,
+    }
 
 
 def test_a_small_study_is_deterministic_and_measures_what_it_says(tmp_path):

@@ -58,6 +58,7 @@ from swarmtag.perception.markers import (
     to_gray,
 )
 from swarmtag.perception.range_study import (
+    LOOSE_RATE,
     MIN_RATE,
     Nuisance,
     RangeStudy,
@@ -71,6 +72,7 @@ __all__ = [
     "CENTRED_TOLERANCE",
     "DEFAULT_RIG",
     "DICTIONARY",
+    "LOOSE_RATE",
     "MARKER_IDS",
     "MIN_RATE",
     "NEEDS_EXTRA",

@@ -3,7 +3,8 @@
 Carriers carry 50 mm markers of OpenCV's ``DICT_ARUCO_MIP_36h12`` (6 x 6 bits,
 250 ids, minimum Hamming distance 12) on their four faces and their underside.
 ``detect_markers`` finds them with ``cv2.aruco.ArucoDetector`` (sub-pixel
-corner refinement) and recovers each marker's pose with ``cv2.solvePnPGeneric``
+corner refinement), reads the candidates it rejected a second time at sub-pixel
+corners (``_bits``), and recovers each marker's pose with ``cv2.solvePnPGeneric``
 and ``SOLVEPNP_IPPE_SQUARE``, which returns both poses a square admits; the one
 whose normal fits where a marker can hang (on a vertical face, or on the
 underside facing down; never facing up) is kept when the two reproject about
@@ -33,6 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.errors import PerceptionError
+from swarmtag.perception._bits import read_candidate
 from swarmtag.perception._opencv import opencv
 from swarmtag.perception.camera import Camera, CarrierMarkers
 
@@ -60,6 +62,12 @@ REFINEMENT_MODULES: Final = 1.0
 MIN_PERIMETER_RATE: Final = 0.02
 """Smallest marker perimeter tried, as a share of the image's larger side: 38 px at 1920 px,
 a side of about 1.2 px per module, where the bits stop being readable (see ``_detector``)."""
+BORDER_PIXELS: Final = 3.0
+"""A marker with a corner nearer the image's edge than this (px) is dropped: it may be cut off.
+OpenCV's ``minDistanceToBorder`` default, applied to the marker itself (see ``_detector``)."""
+SECOND_READ_RMS: Final = 1.0
+"""Most RMS reprojection error (px) of a marker found only by the second read (``_bits``):
+its corners must fit a square; a candidate with a stray corner can still decode."""
 UNDERSIDE_COSINE: Final = math.cos(math.radians(45.0))
 """A marker whose normal points down by more than 45 degrees is an underside marker."""
 
@@ -211,7 +219,7 @@ class MarkerDetection:
 
 @functools.cache
 def _detector() -> Any:  # noqa: ANN401 - a cv2.aruco.ArucoDetector
-    """The detector: OpenCV's defaults with sub-pixel corner refinement over one module.
+    """The detector: OpenCV's defaults but three, each measured on the range study's images.
 
     ``cornerSubPix`` searches ``min(cornerRefinementWinSize, relativeCornerRefinmentWinSize
     x module)`` pixels around each corner. OpenCV's default factor (0.3 of a module) leaves
@@ -222,6 +230,13 @@ def _detector() -> Any:  # noqa: ANN401 - a cv2.aruco.ArucoDetector
     (``minMarkerPerimeterRate``, a share of the image's larger side) is lowered from 0.03
     to ``MIN_PERIMETER_RATE``: 0.03 of 1920 px refused far markers whose bits were still
     readable, and a 36h12 code (Hamming distance 12) keeps false ids out either way.
+
+    ``minDistanceToBorder`` is 0 and ``detect_markers`` applies ``BORDER_PIXELS`` to each
+    marker's own corners instead: recent OpenCV (since opencv/opencv#26968, 2025) groups a
+    marker's nested contours (its black square, its white surround, the panel around that)
+    and tests only the group's largest against the image's edge, so a whole 90 px marker
+    15 px from the edge was dropped because the panel around it ran off the image
+    (docs/perception.md).
     """
     cv2 = opencv()
     dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_ARUCO_MIP_36h12)
@@ -229,6 +244,7 @@ def _detector() -> Any:  # noqa: ANN401 - a cv2.aruco.ArucoDetector
     parameters.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
     parameters.relativeCornerRefinmentWinSize = REFINEMENT_MODULES
     parameters.minMarkerPerimeterRate = MIN_PERIMETER_RATE
+    parameters.minDistanceToBorder = 0
     return cv2.aruco.ArucoDetector(dictionary, parameters)
 
 
@@ -321,31 +337,72 @@ def _pose(
     return rotation, translation, error, tuple(others)
 
 
+def _inside(points: Float, gray: NDArray[np.uint8]) -> bool:
+    """Whether every corner is at least ``BORDER_PIXELS`` inside the image."""
+    high = np.array([gray.shape[1], gray.shape[0]], dtype=np.float64) - 1.0 - BORDER_PIXELS
+    return bool(np.all((points >= BORDER_PIXELS) & (points <= high)))
+
+
+def _found(gray: NDArray[np.uint8]) -> list[tuple[int, Float, bool]]:
+    """(id, corners (4, 2), whether by the second read) of every marker in the image.
+
+    OpenCV's detections first; then each candidate it rejected is read again at
+    sub-pixel corners (``_bits``), unless it touches the image's edge (it would be
+    dropped) or its centre lies in a marker already found (the inner contours of a
+    found marker are candidates too).
+    """
+    cv2 = opencv()
+    detector = _detector()
+    corners, ids, rejected = detector.detectMarkers(gray)
+    marker_ids = np.zeros(0, dtype=np.int32) if ids is None else np.asarray(ids).ravel()
+    found = [
+        (int(marker), np.asarray(points, dtype=np.float64).reshape(4, 2), False)
+        for marker, points in zip(marker_ids, corners, strict=True)
+    ]
+    for candidate in rejected:
+        quad = np.asarray(candidate, dtype=np.float64).reshape(4, 2)
+        if not _inside(quad, gray):
+            continue
+        centre = (float(quad[:, 0].mean()), float(quad[:, 1].mean()))
+        if any(
+            cv2.pointPolygonTest(points.astype(np.float32), centre, False) >= 0
+            for _, points, _ in found
+        ):
+            continue
+        read = read_candidate(gray, quad, detector)
+        if read is not None:
+            found.append((read[0], read[1], True))
+    return found
+
+
 def detect_markers(
     image: object, camera: Camera, carrier: CarrierMarkers
 ) -> tuple[MarkerDetection, ...]:
     """Every marker of the dictionary found in ``image`` taken by ``camera``, sorted by id.
 
-    ``carrier`` gives the markers' size (pose) and where they hang. A marker with no
-    possible pose (see ``_pose``) is left out. Raises ``PerceptionError`` for an image
-    that is not this camera's, ``ConfigError`` when OpenCV (the ``vision`` extra) is missing.
+    ``carrier`` gives the markers' size (pose) and where they hang. Left out: a marker
+    with a corner within ``BORDER_PIXELS`` of the image's edge (it may be cut off), one
+    with no possible pose (see ``_pose``), and one found only by the second read whose
+    corners do not fit a square (``SECOND_READ_RMS``). Raises ``PerceptionError`` for an
+    image that is not this camera's, ``ConfigError`` when OpenCV (the ``vision`` extra)
+    is missing.
     """
     opencv()  # refuses in one line when the extra is missing (the detector may be cached)
     gray = to_gray(image, camera)
-    corners, ids, _ = _detector().detectMarkers(gray)
-    if ids is None:
-        return ()
     mount = camera.mount
     found = []
-    for marker, points in zip(np.asarray(ids).ravel(), corners, strict=True):
-        image_points = np.asarray(points, dtype=np.float64).reshape(4, 2)
+    for marker, image_points, second in _found(gray):
+        if not _inside(image_points, gray):
+            continue
         pose = _pose(image_points, camera, carrier.marker_size)
         if pose is None:
             continue
         rotation, translation, error, others = pose
+        if second and error > SECOND_READ_RMS:
+            continue
         found.append(
             MarkerDetection(
-                marker=int(marker),
+                marker=marker,
                 camera=camera.name,
                 upward=camera.upward,
                 corners=image_points,
