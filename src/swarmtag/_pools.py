@@ -13,6 +13,7 @@ running, which may take minutes.
 from __future__ import annotations
 
 import multiprocessing
+import os
 import signal
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing.context import SpawnContext, SpawnProcess
@@ -36,6 +37,11 @@ class _Worker(SpawnProcess):
                 super().start()
             finally:
                 signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+    def run(self) -> None:
+        """The worker's work; its compiled backend runs one thread (the pool is the parallelism)."""
+        os.environ.setdefault("SWARMTAG_THREADS", "1")
+        super().run()
 
 
 class _Context(SpawnContext):

@@ -209,3 +209,19 @@ def test_broken_toml_names_the_file_once(capsys, tmp_path):
     assert code == 2
     assert err.count(str(config)) == 1
     assert "not valid TOML" in err
+
+
+def test_both_backends_print_the_same_kpis(capsys):
+    outputs = []
+    for backend in ("reference", "fast"):
+        code, out, _ = run(capsys, *SMALL, "--runs", "3", "--backend", backend, "--json")
+        assert code == 0
+        outputs.append(out)
+    assert outputs[0] == outputs[1]
+
+
+def test_an_unknown_backend_is_one_line(capsys):
+    code, _, err = run(capsys, *SMALL, "--backend", "gpu")
+    assert code == 2
+    assert "--backend" in err
+    assert len(err.strip().splitlines()) == 1

@@ -107,3 +107,21 @@ def test_the_progress_bar_changes_nothing(tmp_path, capsys):
     hidden = run_study(study, out_dir=tmp_path / "hidden", workers=1, progress=False)
     assert shown.metrics == hidden.metrics
     capsys.readouterr()
+
+
+def test_backends_store_the_same_runs(tmp_path):
+    # the reference in two worker processes, the compiled kernel on two threads in this process
+    reference = run_study(small_study(backend="reference"), out_dir=tmp_path / "ref", workers=2)
+    fast = run_study(small_study(backend="fast"), out_dir=tmp_path / "fast", workers=2)
+    study = small_study()
+    assert stored_csv(tmp_path / "ref", study, 6) == stored_csv(tmp_path / "fast", study, 6)
+    assert reference.metrics == fast.metrics
+    override = run_study(small_study(), out_dir=tmp_path / "over", workers=1, backend="reference")
+    assert override.metrics == fast.metrics
+
+
+def test_unknown_backends_are_refused(tmp_path):
+    with pytest.raises(StudyError, match="backend: 'gpu' is not one of reference, fast"):
+        small_study(backend="gpu")
+    with pytest.raises(StudyError, match="backend"):
+        run_study(small_study(), out_dir=tmp_path, workers=1, backend="gpu")

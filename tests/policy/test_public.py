@@ -12,14 +12,18 @@ import swarmtag.policy
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "policy.md"
 PUBLIC = {
+    "PROXIMITY_KIND",
     "PROXIMITY_RANGE",
+    "URGENCY_KIND",
     "URGENCY_SCALE",
+    "WEIGHTED_KIND",
     "Candidate",
     "Policy",
     "Proximity",
     "Urgency",
     "Weighted",
     "choose",
+    "kernel_score",
     "parse_policy",
     "proximity_term",
     "select",

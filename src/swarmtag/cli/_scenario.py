@@ -19,9 +19,10 @@ from swarmtag.errors import ConfigError
 from swarmtag.sim import Scenario
 from swarmtag.sim._mapping import load_toml
 from swarmtag.sim.profiles import DEFAULT_PROFILE, load_profile
+from swarmtag.sim.runner import BACKENDS
 from swarmtag.sim.sensors import OCCLUSION_MODELS, PERCEPTION_MODELS
 
-__all__ = ["SCENARIO_FLAGS", "build_scenario", "parse_set", "scenario_options"]
+__all__ = ["SCENARIO_FLAGS", "backend_option", "build_scenario", "parse_set", "scenario_options"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -39,6 +40,15 @@ SCENARIO_FLAGS: Final = {
     "urgency_model": "urgency.model",
 }
 """Keyword of each named scenario flag -> the scenario key it sets."""
+
+
+backend_option = click.option(
+    "--backend",
+    type=click.Choice(BACKENDS),
+    default=None,
+    help="Simulation backend: the numpy reference kernel, or the compiled kernel (numba, the "
+    "fast extra; the same results) [default: fast where numba is installed].",
+)
 
 
 def parse_set(text: str) -> tuple[str, Any]:

@@ -17,7 +17,7 @@ from swarmtag._outputs import OutputPlan, Stage
 from swarmtag._resources import check_memory
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
-from swarmtag.cli._scenario import build_scenario, scenario_options
+from swarmtag.cli._scenario import backend_option, build_scenario, scenario_options
 from swarmtag.cli.metrics import render_choices, render_report, summarize_with_choices
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
@@ -115,6 +115,7 @@ def run_conditions(
     run_offset: int = 0,
     progress: bool = False,
     controller: str = "builtin",
+    backend: str | None = None,
 ) -> tuple[CarrierLog, EventTable]:
     """Simulate every condition in chunks of runs; the logs of all conditions, concatenated."""
     logs: list[CarrierLog] = []
@@ -139,6 +140,7 @@ def run_conditions(
                     runs=count,
                     run_offset=run_offset + start,
                     controller=controller,
+                    backend=backend,
                 )
                 logs.append(result.carriers)
                 tables.append(result.events)
@@ -158,6 +160,7 @@ def _draw(
     mcap_path: Path | None,
     stage: Stage,
     controller: str,
+    backend: str | None,
 ) -> list[str]:
     """Re-run ``run`` of each condition recording it; draw and save it; say what was written."""
     from swarmtag.sim.render import animate, snapshot  # noqa: PLC0415 - matplotlib is an extra
@@ -173,6 +176,7 @@ def _draw(
             run_offset=run,
             record=True,
             controller=controller,
+            backend=backend,
         )
         traj = result.trajectories
         assert traj is not None
@@ -274,6 +278,7 @@ def _draw(
     help="Who decides for the robots: the vectorised built-in controller, or a behaviour "
     "tree per robot (bt; the robot extra). Both give the same event logs.",
 )
+@backend_option
 @baseline_option
 @resamples_option
 @click.option("--json", "as_json", is_flag=True, help="Print the KPI JSON of SPEC §8.2.")
@@ -302,6 +307,7 @@ def simulate_cmd(
     mcap: Path | None,
     draw_run: int | None,
     controller: str,
+    backend: str | None,
     baseline: str | None,
     resamples: int,
     as_json: bool,
@@ -349,6 +355,7 @@ def simulate_cmd(
             run_offset=run_offset,
             progress=show,
             controller=controller,
+            backend=backend,
         )
         report, choices = summarize_with_choices(
             log, table, baseline=baseline, resamples=resamples, seed=seed
@@ -372,6 +379,7 @@ def simulate_cmd(
                 mcap_path=mcap,
                 stage=stage,
                 controller=controller,
+                backend=backend,
             )
     if as_json:
         document = {**report.to_json(), "choices": [c.to_json() for c in choices]}

@@ -12,6 +12,7 @@ import click
 
 from swarmtag._checks import MAX_RESAMPLES, MAX_WORKERS
 from swarmtag._inputs import check_path
+from swarmtag.cli._scenario import backend_option
 from swarmtag.errors import StudyError
 
 __all__ = ["reproduce", "study"]
@@ -19,7 +20,7 @@ __all__ = ["reproduce", "study"]
 workers_option = click.option(
     "--workers",
     type=click.IntRange(1, MAX_WORKERS),
-    help="Worker processes [default: the number of CPU cores].",
+    help="Worker processes, or with the fast backend threads [default: the number of CPU cores].",
 )
 scheduler_option = click.option(
     "--scheduler",
@@ -49,6 +50,7 @@ def study() -> None:
     help="Results folder: the store (results.duckdb) and per-study metrics.",
 )
 @click.option("--quick", is_flag=True, help="Run the study's quick_runs per condition only.")
+@backend_option
 @workers_option
 @scheduler_option
 @progress_option
@@ -57,6 +59,7 @@ def run_cmd(
     source: str,
     out_dir: Path,
     quick: bool,
+    backend: str | None,
     workers: int | None,
     scheduler: str | None,
     progress: bool | None,
@@ -72,7 +75,13 @@ def run_cmd(
     spec = load_study(source)
     show = sys.stderr.isatty() if progress is None else progress
     result = run_study(
-        spec, out_dir=out_dir, quick=quick, workers=workers, scheduler=scheduler, progress=show
+        spec,
+        out_dir=out_dir,
+        quick=quick,
+        workers=workers,
+        scheduler=scheduler,
+        progress=show,
+        backend=backend,
     )
     click.echo(
         f"{result.study}: {result.computed_runs} runs computed, "
@@ -151,6 +160,7 @@ def report_cmd(
     show_default=True,
     help="Results folder: store, metrics, tables, figures and report.html.",
 )
+@backend_option
 @workers_option
 @scheduler_option
 @progress_option
@@ -159,6 +169,7 @@ def reproduce(
     quick: bool,
     sources: tuple[str, ...],
     out_dir: Path,
+    backend: str | None,
     workers: int | None,
     scheduler: str | None,
     progress: bool | None,
@@ -177,7 +188,13 @@ def reproduce(
     for spec in studies:
         begin = time.perf_counter()
         result = run_study(
-            spec, out_dir=out_dir, quick=quick, workers=workers, scheduler=scheduler, progress=show
+            spec,
+            out_dir=out_dir,
+            quick=quick,
+            workers=workers,
+            scheduler=scheduler,
+            progress=show,
+            backend=backend,
         )
         wall = time.perf_counter() - begin
         record = StudyRecord(

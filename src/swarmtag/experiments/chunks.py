@@ -34,6 +34,10 @@ class ChunkJob:
     condition: str
     run_offset: int
     runs: int
+    backend: str | None = None
+    """Simulation backend (``None``: the default, ``fast`` where numba is installed)."""
+    threads: int | None = None
+    """Threads of the compiled backend (``None``: every core)."""
 
 
 def simulate_chunk(job: ChunkJob) -> ChunkResult:
@@ -44,6 +48,8 @@ def simulate_chunk(job: ChunkJob) -> ChunkResult:
         seed=job.key.seed,
         runs=job.runs,
         run_offset=job.run_offset,
+        backend=job.backend,
+        threads=job.threads,
     )
     return result.carriers, result.events
 

@@ -34,12 +34,12 @@ from swarmtag._inputs import check_path
 from swarmtag._resources import check_memory
 from swarmtag.analysis import summarize
 from swarmtag.analysis.resampling import bootstrap_memory
-from swarmtag.errors import StudyError
+from swarmtag.errors import ConfigError, StudyError
 from swarmtag.experiments.chunks import ChunkJob, ChunkResult, split_runs
 from swarmtag.experiments.execute import run_dask, run_local
 from swarmtag.experiments.spec import Study
 from swarmtag.experiments.store import ResultsStore, RunKey
-from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER
+from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER, resolve_backend
 
 __all__ = [
     "QUICK_RESAMPLES",
@@ -69,8 +69,18 @@ def study_key(study: Study, scale: str) -> RunKey:
     )
 
 
-def plan_chunks(study: Study, store: ResultsStore, *, quick: bool = False) -> list[ChunkJob]:
-    """The chunks of runs ``study`` still needs, in (scale, condition, run) order."""
+def plan_chunks(
+    study: Study,
+    store: ResultsStore,
+    *,
+    quick: bool = False,
+    backend: str | None = None,
+    threads: int | None = None,
+) -> list[ChunkJob]:
+    """The chunks of runs ``study`` still needs, in (scale, condition, run) order.
+
+    ``backend`` and ``threads`` go with every chunk (``swarmtag.sim.simulate``).
+    """
     total = study.run_count(quick=quick)
     jobs: list[ChunkJob] = []
     for scale in study.scales:
@@ -84,6 +94,8 @@ def plan_chunks(study: Study, store: ResultsStore, *, quick: bool = False) -> li
                     condition=condition,
                     run_offset=offset,
                     runs=count,
+                    backend=backend,
+                    threads=threads,
                 )
                 for offset, count in split_runs(missing, study.chunk_runs)
             )
@@ -189,6 +201,25 @@ def _prepare_folder(folder: Path, name: str) -> None:
         raise StudyError(msg) from None
 
 
+def _execution(
+    study: Study, backend: str | None, scheduler: str | None, workers: int | None
+) -> tuple[str | None, int | None]:
+    """The backend and kernel threads of a study's chunks.
+
+    Locally the backend is resolved here (the compiled one runs the chunks in
+    this process on ``workers`` threads; worker processes run one thread
+    each); a Dask worker resolves the default itself and runs one thread.
+    """
+    chosen = study.backend if backend is None else backend
+    try:
+        resolved = resolve_backend(chosen)
+    except ConfigError as error:
+        raise StudyError(str(error)) from None
+    if scheduler is not None:
+        return chosen, 1
+    return resolved, workers if resolved == "fast" else 1
+
+
 def run_study(
     study: Study,
     *,
@@ -197,12 +228,15 @@ def run_study(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = False,
+    backend: str | None = None,
 ) -> StudyResult:
     """Compute the runs of ``study`` missing from the store in ``out_dir``, then its metrics.
 
     ``workers`` processes (default ``os.cpu_count()``) simulate chunks, or
     the Dask distributed cluster whose scheduler is at ``scheduler``
-    (``"tcp://host:8786"``); results are identical either way. ``quick``
+    (``"tcp://host:8786"``); results are identical either way. With the
+    compiled backend (``backend``, else the study's, else the default) the
+    chunks run in this process, each on ``workers`` threads. ``quick``
     runs ``study.quick_runs`` per condition and at most ``QUICK_RESAMPLES``
     bootstrap resamples.
     Returns where everything went; writes ``metrics.json`` per scale.
@@ -212,6 +246,8 @@ def run_study(
     if workers is not None and workers < 1:
         msg = f"workers: {workers} is not an integer >= 1"
         raise StudyError(msg)
+    job_backend, threads = _execution(study, backend, scheduler, workers)
+    in_threads = job_backend == "fast" and scheduler is None
     folder = check_path(out_dir, what="--out", error=StudyError)
     check_path(folder / study.name / "progress.json", what="--out", error=StudyError)
     runs = study.run_count(quick=quick)
@@ -224,7 +260,17 @@ def run_study(
     with _Created(folder, study_dir, *stores, *scale_dirs) as created:
         _prepare_folder(folder, study.name)
         with ResultsStore(folder / STORE_NAME) as store:
-            jobs = sorted(plan_chunks(study, store, quick=quick), key=_cost, reverse=True)
+            jobs = sorted(
+                plan_chunks(
+                    study,
+                    store,
+                    quick=quick,
+                    backend=job_backend,
+                    threads=threads,
+                ),
+                key=_cost,
+                reverse=True,
+            )
             todo = sum(job.runs for job in jobs)
             done = total - todo
             _write_progress(progress_path, done, total)
@@ -247,6 +293,8 @@ def run_study(
 
                 if scheduler is not None:
                     run_dask(jobs, scheduler, store_chunk)
+                elif in_threads:
+                    run_local(jobs, 1, store_chunk)  # each chunk's runs on the threads
                 else:
                     run_local(jobs, workers or os.cpu_count() or 1, store_chunk)
             metrics: dict[str, dict[str, Any]] = {}

@@ -19,6 +19,8 @@ The file layout (every key but ``name``, ``conditions`` and ``runs`` optional)::
     urgency = "growing"         # urgency model: "growing" or "static"
     seed = 0                    # master seed of the runs and of the bootstrap
     profile = "paper-sim"       # profile of free parameters (a shipped name or a file)
+    backend = "fast"            # simulation backend: "reference" or "fast" (default: fast
+                                # where numba is installed; the results are the same bytes)
     resamples = 10000           # bootstrap resamples of the metrics
     chunk_runs = 10             # runs per unit of work (results do not depend on it)
 
@@ -52,6 +54,7 @@ from swarmtag.policy import Policy, parse_policy
 from swarmtag.sim import Scenario
 from swarmtag.sim.groups import MAX_TICKS
 from swarmtag.sim.profiles import DEFAULT_PROFILE, Profile, load_profile
+from swarmtag.sim.runner import BACKENDS
 
 __all__ = ["DEFAULT_SCALE", "URGENCY_MODELS", "Scale", "Study", "read_study_file"]
 
@@ -71,6 +74,7 @@ _KEYS: Final = (
     "urgency",
     "seed",
     "profile",
+    "backend",
     "resamples",
     "chunk_runs",
     "scenario",
@@ -174,6 +178,8 @@ class Study:
     chunk_runs: int = 10
     description: str = ""
     profile: str = DEFAULT_PROFILE
+    backend: str | None = None
+    """Simulation backend: ``reference``, ``fast``, or ``None`` for the default (results agree)."""
     source: str | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
@@ -199,6 +205,9 @@ class Study:
         _int(self.seed, "seed", low=0, high=MAX_SEED)
         _int(self.resamples, "resamples", low=1, high=MAX_RESAMPLES)
         _int(self.chunk_runs, "chunk_runs", low=1, high=MAX_CHUNK_RUNS)
+        if self.backend is not None and self.backend not in BACKENDS:
+            msg = f"backend: {self.backend!r} is not one of {', '.join(BACKENDS)}"
+            raise StudyError(msg)
         if not self.baseline:
             object.__setattr__(self, "baseline", self.conditions[0])
         if self.baseline not in self.conditions:
@@ -257,6 +266,7 @@ class Study:
             chunk_runs=_int(data.get("chunk_runs", 10), "chunk_runs", low=1, high=MAX_CHUNK_RUNS),
             urgency=urgency,
             profile=profile_name,
+            backend=data.get("backend"),
             scales=_scales(data, urgency, ticks, profile),
             source=source,
         )

@@ -20,20 +20,25 @@ Urgency(alpha=0.7)
 from __future__ import annotations
 
 from swarmtag.policy._choose import Candidate, choose
+from swarmtag.policy._kernel import PROXIMITY_KIND, URGENCY_KIND, WEIGHTED_KIND, kernel_score
 from swarmtag.policy._names import parse_policy
 from swarmtag.policy._policies import Policy, Proximity, Urgency, Weighted
 from swarmtag.policy._select import select
 from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE, proximity_term
 
 __all__ = [
+    "PROXIMITY_KIND",
     "PROXIMITY_RANGE",
+    "URGENCY_KIND",
     "URGENCY_SCALE",
+    "WEIGHTED_KIND",
     "Candidate",
     "Policy",
     "Proximity",
     "Urgency",
     "Weighted",
     "choose",
+    "kernel_score",
     "parse_policy",
     "proximity_term",
     "select",

@@ -17,6 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from swarmtag.errors import PolicyError
+from swarmtag.policy._kernel import PROXIMITY_KIND, URGENCY_KIND, WEIGHTED_KIND
 from swarmtag.policy._terms import as_float_array, formula, wrap_result
 
 __all__ = ["Policy", "Proximity", "Urgency", "Weighted"]
@@ -43,6 +44,11 @@ class Policy(ABC):
     @abstractmethod
     def name(self) -> str:
         """Canonical condition name (SPEC §8.1), e.g. ``urgency:alpha=0.7``."""
+
+    @property
+    @abstractmethod
+    def kernel_form(self) -> tuple[int, float]:
+        """``(kind, parameter)`` for ``swarmtag.policy.kernel_score`` (compiled kernels)."""
 
     @abstractmethod
     def _formula(
@@ -104,6 +110,11 @@ class Proximity(Policy):
         """Canonical condition name: ``proximity``."""
         return "proximity"
 
+    @property
+    def kernel_form(self) -> tuple[int, float]:
+        """``(PROXIMITY_KIND, 0.0)``."""
+        return PROXIMITY_KIND, 0.0
+
     def _formula(
         self, urgency: npt.NDArray[np.float64], distance: npt.NDArray[np.float64]
     ) -> npt.NDArray[np.float64]:
@@ -137,6 +148,11 @@ class Urgency(Policy):
     def name(self) -> str:
         """Canonical condition name, e.g. ``urgency:alpha=0.7`` (alpha as ``repr(float)``)."""
         return f"urgency:alpha={self.alpha!r}"
+
+    @property
+    def kernel_form(self) -> tuple[int, float]:
+        """``(URGENCY_KIND, alpha)``."""
+        return URGENCY_KIND, self.alpha
 
     def _formula(
         self, urgency: npt.NDArray[np.float64], distance: npt.NDArray[np.float64]
@@ -174,6 +190,11 @@ class Weighted(Policy):
     def name(self) -> str:
         """Canonical condition name, e.g. ``weighted:w=0.3`` (w as ``repr(float)``)."""
         return f"weighted:w={self.w!r}"
+
+    @property
+    def kernel_form(self) -> tuple[int, float]:
+        """``(WEIGHTED_KIND, w)``."""
+        return WEIGHTED_KIND, self.w
 
     def _formula(
         self, urgency: npt.NDArray[np.float64], distance: npt.NDArray[np.float64]

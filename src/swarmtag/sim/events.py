@@ -146,6 +146,28 @@ class EventRecorder:
                 )
             )
 
+    def add_rows(
+        self,
+        runs: Int,
+        ticks: Int,
+        kinds: Int,
+        *,
+        carriers: Int,
+        robots: Int,
+        values: Float,
+    ) -> None:
+        """Rows made elsewhere (a compiled kernel's buffers): batch rows, ticks, kinds, ..."""
+        self._rows.append(
+            (
+                runs.astype(np.int64),
+                ticks.astype(np.int64),
+                kinds.astype(np.int64),
+                carriers.astype(np.int64),
+                robots.astype(np.int64),
+                values.astype(np.float64),
+            )
+        )
+
     def table(
         self,
         *,

@@ -52,6 +52,7 @@ __all__ = [
     "due_writes",
     "stream",
     "unit_vectors",
+    "walk_turns",
 ]
 
 _BLOCK_BYTES: Final = 16 * 2**20
@@ -96,6 +97,17 @@ def unit_vectors(gaussians: Float) -> Float:
     safe = np.where(zero, 1.0, norm)
     unit = gaussians / safe[..., None]
     return np.where(zero[..., None], np.array([1.0, 0.0]), unit)
+
+
+def walk_turns(uniform: Float, params: Params) -> Float:
+    """Walk turns ``(cos, sin)`` (last axis) from the walk stream's uniform numbers.
+
+    The angle is ``(2u - 1) * walk_turn_angle``; every backend takes its
+    turns from here, so the one transcendental step is the same numpy call.
+    """
+    angle = (2.0 * uniform - 1.0) * params.walk_turn_angle
+    turns: Float = np.stack((np.cos(angle), np.sin(angle)), axis=-1)
+    return turns
 
 
 @dataclass(frozen=True, eq=False)
@@ -220,8 +232,7 @@ class RandomSource:
         if Stream.CAMERA in self._blocks:
             noise = self._blocks[Stream.CAMERA][row] * params.detection_noise
         if Stream.WALK in self._blocks:
-            angle = (2.0 * self._blocks[Stream.WALK][row] - 1.0) * params.walk_turn_angle
-            turn = np.stack((np.cos(angle), np.sin(angle)), axis=-1)
+            turn = walk_turns(self._blocks[Stream.WALK][row], params)
         return TickInputs(
             walk=unit_vectors(motion[..., 0:2]),
             sidestep=unit_vectors(motion[..., 2:4]),

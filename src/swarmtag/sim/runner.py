@@ -9,6 +9,7 @@ the event logs of SPEC §8.1.
 
 from __future__ import annotations
 
+import importlib.util
 from dataclasses import dataclass
 from typing import Final, Protocol
 
@@ -34,12 +35,15 @@ from swarmtag.sim.trajectories import Trajectories, TrajectoryRecorder
 from swarmtag.tag import TagStatus
 
 __all__ = [
+    "BACKENDS",
     "CONTROLLERS",
     "LOG_BYTES_PER_CARRIER",
     "InputSource",
     "SimResult",
     "batch_memory",
     "carrier_log",
+    "fast_available",
+    "resolve_backend",
     "run_batch",
     "seeded_state",
     "simulate",
@@ -143,7 +147,21 @@ def run_batch(
         if recorder is not None:
             recorder.add(after)
         state = after
+    return _result(
+        state, params, seed=seed, events=events, breakdowns=breakdowns, recorder=recorder
+    )
 
+
+def _result(
+    state: WorldState,
+    params: Params,
+    *,
+    seed: int,
+    events: EventRecorder,
+    breakdowns: Int,
+    recorder: TrajectoryRecorder | None,
+) -> SimResult:
+    """The ``SimResult`` of a finished batch, whichever backend ran it."""
     delivered = (state.delivery_time >= 0).sum(axis=1)
     stuck = (
         (state.status == TagStatus.PICKED_UP)
@@ -172,6 +190,41 @@ def run_batch(
 
 CONTROLLERS: Final = ("builtin", "bt")
 """Controllers ``simulate`` can run: the vectorised built-in one, the behaviour trees."""
+MAX_THREADS: Final = 1024
+"""Most threads the compiled backend is asked to use."""
+BACKENDS: Final = ("reference", "fast")
+"""Simulation backends: the numpy reference kernel, the compiled kernel (numba, ``fast`` extra)."""
+
+
+def fast_available() -> bool:
+    """Whether the compiled backend can run here (numba is installed)."""
+    return importlib.util.find_spec("numba") is not None
+
+
+def resolve_backend(backend: str | None, *, controller: str = "builtin") -> str:
+    """The backend to run: ``backend`` checked, or the default when it is ``None``.
+
+    The default is ``fast`` where numba is installed and ``reference``
+    otherwise (the two give the same bytes); the behaviour-tree controller
+    runs on the reference world only.
+    """
+    if backend is None:
+        return "fast" if controller == "builtin" and fast_available() else "reference"
+    backend = check_choice("backend", backend, BACKENDS)
+    if backend == "fast":
+        if controller != "builtin":
+            msg = (
+                f"backend: 'fast' runs the built-in controller only; the {controller!r} "
+                "controller runs on the reference backend"
+            )
+            raise ConfigError(msg)
+        if not fast_available():
+            msg = (
+                "backend: 'fast' needs numba (install the fast extra: pip install 'swarmtag[fast]')"
+            )
+            raise ConfigError(msg)
+    return backend
+
 
 LOG_BYTES_PER_CARRIER: Final = 2200
 """Memory per carrier and run of logs kept until written: the carrier row (~120 B), its ~8
@@ -199,13 +252,23 @@ def batch_memory(scenario: Scenario, runs: int, *, record: bool = False) -> floa
     return runs * per_run
 
 
-def seeded_state(params: Params, *, seed: int, runs: int, run_offset: int = 0) -> WorldState:
-    """The start state of global runs ``run_offset .. run_offset + runs - 1`` of ``seed``."""
+def seeded_state(
+    params: Params, *, seed: int, runs: int, run_offset: int = 0, backend: str = "reference"
+) -> WorldState:
+    """The start state of global runs ``run_offset .. run_offset + runs - 1`` of ``seed``.
+
+    ``backend="fast"`` samples the scenes with the compiled sampler (the same scenes).
+    """
     seed = check_seed(seed)
     runs = check_int("runs", runs, low=1, high=MAX_RUN_INDEX)
     run_offset = check_int("run_offset", run_offset, low=0, high=MAX_RUN_INDEX - runs)
     run_ids = np.arange(run_offset, run_offset + runs, dtype=np.int64)
-    scenes = [sample_scene(params, seed=seed, run=int(run)) for run in run_ids]
+    if check_choice("backend", backend, BACKENDS) == "fast":
+        from swarmtag.sim.fast import seeded_scenes  # noqa: PLC0415 - numba is an extra
+
+        scenes = seeded_scenes(params, seed=seed, run_ids=run_ids.tolist())
+    else:
+        scenes = [sample_scene(params, seed=seed, run=int(run)) for run in run_ids]
     return initial_state(params, scenes, run_ids)
 
 
@@ -219,6 +282,8 @@ def simulate(
     record: bool = False,
     check: bool = False,
     controller: str = "builtin",
+    backend: str | None = None,
+    threads: int | None = None,
 ) -> SimResult:
     """Simulate runs ``run_offset ..`` of master ``seed`` under ``policy`` (SPEC §4).
 
@@ -227,6 +292,10 @@ def simulate(
     ``check=True`` verifies the world invariants every tick (slower).
     ``controller``: ``"builtin"`` (vectorised, the default) or ``"bt"`` (each
     robot under its own behaviour tree, ``swarmtag.robot``; same event logs).
+    ``backend``: ``"reference"`` (numpy) or ``"fast"`` (compiled with numba;
+    the same bytes); ``None`` picks ``fast`` where numba is installed.
+    ``threads``: threads the fast backend runs runs on (default: every core,
+    or ``SWARMTAG_THREADS``).
 
     >>> from swarmtag.policy import Urgency
     >>> result = simulate(Scenario(ticks=600), Urgency(alpha=0.7), seed=1, runs=2)
@@ -239,13 +308,25 @@ def simulate(
         raise ConfigError(msg)
     runs = check_int("runs", runs, low=1, high=MAX_RUN_INDEX)
     controller = check_choice("controller", controller, CONTROLLERS)
+    backend = resolve_backend(backend, controller=controller)
+    if threads is not None:
+        threads = check_int("threads", threads, low=1, high=MAX_THREADS)
     check_memory(
         f"{runs} runs of {scenario.robots} robots and {scenario.carriers} carriers",
         batch_memory(scenario, runs, record=record),
         error=ConfigError,
     )
     params = make_params(scenario, policy)
-    state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset)
+    state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset, backend=backend)
+    if backend == "fast":
+        from swarmtag.sim.fast import simulate_fast  # noqa: PLC0415 - numba is an extra
+
+        final, events, breakdowns, recorder = simulate_fast(
+            state, params, seed=seed, record=record, check=check, threads=threads
+        )
+        return _result(
+            final, params, seed=seed, events=events, breakdowns=breakdowns, recorder=recorder
+        )
     source = RandomSource(params, seed=seed, run_ids=state.run_ids)
     if controller == "builtin":
         return run_batch(state, params, source, seed=seed, record=record, check=check)

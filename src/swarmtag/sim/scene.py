@@ -38,7 +38,7 @@ from swarmtag.sim.state import Scene
 from swarmtag.sim.urgency import initial_urgency
 from swarmtag.tag import TagStatus
 
-__all__ = ["sample_scene"]
+__all__ = ["crowded", "sample_scene"]
 
 _ATTEMPTS: Final = 1000
 _RESTARTS: Final = 100
@@ -67,11 +67,16 @@ def _place(
                 break
         else:
             return placed
+    raise crowded(what)
+
+
+def crowded(what: str) -> ConfigError:
+    """The error for bodies (``what``) that rejection sampling could not place."""
     msg = (
         f"{what}: could not place them without overlap after {_RESTARTS} tries; "
         "the area is too crowded (widen it or place fewer)"
     )
-    raise ConfigError(msg)
+    return ConfigError(msg)
 
 
 def sample_scene(params: Params, *, seed: int, run: int) -> Scene:

@@ -1,0 +1,40 @@
+"""The policies' formulas as one plain scalar function, for compiled kernels.
+
+``kernel_score(kind, parameter, urgency, distance)`` performs exactly the
+IEEE operations of ``Policy.score`` (``_terms.formula`` and each policy's
+``_formula``), in the same order, on Python floats, so a compiler such as
+numba can take it as it is and give bit-identical scores; a policy names its
+``(kind, parameter)`` with ``Policy.kernel_form``. Tests check the two forms
+against each other.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE
+
+__all__ = ["PROXIMITY_KIND", "URGENCY_KIND", "WEIGHTED_KIND", "kernel_score"]
+
+PROXIMITY_KIND: Final = 0
+"""``kernel_form`` kind of ``Proximity`` (parameter unused)."""
+URGENCY_KIND: Final = 1
+"""``kernel_form`` kind of ``Urgency`` (parameter: alpha)."""
+WEIGHTED_KIND: Final = 2
+"""``kernel_form`` kind of ``Weighted`` (parameter: w)."""
+
+
+def kernel_score(kind: int, parameter: float, urgency: float, distance: float) -> float:
+    """The score of one carrier under the policy ``(kind, parameter)``.
+
+    >>> kernel_score(URGENCY_KIND, 0.5, 4.0, 1.8)
+    20.0
+    """
+    term = distance / PROXIMITY_RANGE
+    term = min(term, 1.0)  # np.minimum(term, 1.0): term unless 1.0 is smaller
+    term = URGENCY_SCALE * (1.0 - term)
+    if kind == URGENCY_KIND:
+        return urgency * (parameter + term)
+    if kind == WEIGHTED_KIND:
+        return parameter * urgency + (1.0 - parameter) * term
+    return term

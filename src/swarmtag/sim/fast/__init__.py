@@ -1,0 +1,16 @@
+"""The compiled simulation backend (``backend="fast"``): the reference kernel's world in numba.
+
+Same scenario, same start state, same per-run random streams, same event
+logs byte for byte as ``swarmtag.sim``'s numpy kernel, which stays the
+readable reference and the test oracle. Runs are advanced in parallel on
+every core. Needs numba (the ``fast`` extra); import this package only
+through ``swarmtag.sim.simulate(..., backend="fast")`` or after checking
+``swarmtag.sim.runner.fast_available()``.
+"""
+
+from __future__ import annotations
+
+from swarmtag.sim.fast._runner import simulate_fast
+from swarmtag.sim.fast._scene import seeded_scenes
+
+__all__ = ["seeded_scenes", "simulate_fast"]

@@ -1,0 +1,230 @@
+"""Breakdowns and the built-in controller's ``decide`` step, compiled, robot by robot.
+
+``break_down_robots`` is ``world.break_down``; ``decide_robots`` is
+``sim/decide.py`` (pursuit checks, taken faces, selection with the policy's
+``kernel_score``, walk and sidestep directions). A robot's decision reads the
+other robots' positions but changes only its own fields, so any range of
+robots can be decided independently.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from swarmtag.policy._kernel import kernel_score
+from swarmtag.sim.fast._events import emit
+from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, away_from, norm
+from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._layout import Constants, Scratch, World
+
+__all__ = ["break_down_robots", "decide_robots"]
+
+_WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
+_AWAITING = 1
+_BREAKDOWN, _ABANDON, _TIMEOUT, _SELECT, _CANDIDATES = 1, 2, 3, 4, 5
+
+_score = jit(kernel_score)
+
+
+@jit
+def _loaded(mode: int, target: int) -> bool:
+    """``_index.is_loaded`` for one robot."""
+    return (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and target >= 0
+
+
+@jit
+def _to_walk(r: int, n: int, w: World) -> None:
+    """``_index.to_walk`` for one robot."""
+    w.mode[r, n] = _WALK
+    w.target[r, n] = -1
+    w.face[r, n] = -1
+    w.timer[r, n] = 0
+    w.redirect[r, n] = True
+
+
+@jit
+def break_down_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+    """Robots whose breakdown number fired break down for good (``world.break_down``)."""
+    if k.breakdown <= 0:
+        return
+    for n in range(lo, hi):
+        mode = w.mode[r, n]
+        if not (x.breakdown_draw[r, n] < k.breakdown) or mode == _BROKEN:
+            continue
+        loaded = _loaded(mode, w.target[r, n])
+        emit(r, n, _BREAKDOWN, w.target[r, n] if loaded else -1, np.nan, x)
+        if not loaded:
+            w.target[r, n] = -1
+        w.face[r, n] = -1
+        w.mode[r, n] = _BROKEN
+
+
+@jit
+def _taken(r: int, n: int, cx: float, cy: float, face: int, w: World, k: Constants) -> bool:
+    """``predock.taken_faces`` for one robot, carrier centre and face."""
+    px = cx + FACE_X[face] * k.predock_offset
+    py = cy + FACE_Y[face] * k.predock_offset
+    rx = w.robot_pos[r, n, 0]
+    ry = w.robot_pos[r, n, 1]
+    mine = norm(rx - px, ry - py)
+    body = 2 * k.robot_radius
+    for m in range(k.robots):
+        if m == n:
+            continue
+        mx = w.robot_pos[r, m, 0]
+        my = w.robot_pos[r, m, 1]
+        gap = norm(mx - px, my - py)
+        if gap < body and gap < mine and norm(rx - mx, ry - my) <= k.detection_radius:
+            return True
+    return False
+
+
+@jit
+def _nearest_face(r: int, n: int, c: int, avoid_taken: bool, w: World, k: Constants) -> int:
+    """``predock.nearest_free_face`` over the carrier's free faces (minus taken ones)."""
+    cx = w.carrier_pos[r, c, 0]
+    cy = w.carrier_pos[r, c, 1]
+    rx = w.robot_pos[r, n, 0]
+    ry = w.robot_pos[r, n, 1]
+    best = -1
+    best_distance = math.inf
+    for face in range(4):
+        if not w.free_face[r, c, face]:
+            continue
+        if avoid_taken and _taken(r, n, cx, cy, face, w, k):
+            continue
+        px = cx + FACE_X[face] * k.predock_offset
+        py = cy + FACE_Y[face] * k.predock_offset
+        distance = norm(px - rx, py - ry)
+        if best < 0 or distance < best_distance:
+            best = face
+            best_distance = distance
+    return best
+
+
+@jit
+def _pursuit_check(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
+    """Abandon unless AWAITING_PICKUP was heard, else time out (``decide._pursuit_checks``)."""
+    mode = w.mode[r, n]
+    if not _PREDOCK <= mode <= _CENTRE:
+        return
+    target = w.target[r, n]
+    heard = w.known_status[r, n, max(target, 0)]
+    if heard != _AWAITING:
+        emit(r, n, _ABANDON, target, float(heard), x)
+        _to_walk(r, n, w)
+    elif t - w.pursuit_start[r, n] >= k.timeout_ticks:
+        emit(r, n, _TIMEOUT, target, np.nan, x)
+        w.blocked_until[r, n, target] = t + k.cooldown_ticks
+        _to_walk(r, n, w)
+
+
+@jit
+def _switch_taken_face(r: int, n: int, w: World, k: Constants) -> None:
+    """A robot in PREDOCK whose point is taken moves on (``decide._switch_taken_faces``)."""
+    if not k.avoid_taken_faces or w.mode[r, n] != _PREDOCK:
+        return
+    target = w.target[r, n]
+    cx = w.carrier_pos[r, target, 0]
+    cy = w.carrier_pos[r, target, 1]
+    if not _taken(r, n, cx, cy, max(w.face[r, n], 0), w, k):
+        return
+    other = _nearest_face(r, n, target, True, w, k)
+    if other >= 0:
+        w.face[r, n] = other
+
+
+@jit
+def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
+    """Choose among the candidates (``decide._selection`` with ``policy.select``'s tie rule)."""
+    best = -1
+    best_score = 0.0
+    best_distance = 0.0
+    count = 0
+    for c in range(k.carriers):
+        if not (
+            x.known[r, n, c]
+            and w.known_status[r, n, c] == _AWAITING
+            and w.blocked_until[r, n, c] <= t
+            and (
+                w.free_face[r, c, 0]
+                or w.free_face[r, c, 1]
+                or w.free_face[r, c, 2]
+                or w.free_face[r, c, 3]
+            )
+        ):
+            continue
+        count += 1
+        distance = x.measured[r, n, c]
+        score = _score(k.policy_kind, k.policy_parameter, float(w.known_urgency[r, n, c]), distance)
+        if best < 0 or score > best_score or (score == best_score and distance < best_distance):
+            best = c
+            best_score = score
+            best_distance = distance
+    if best < 0:
+        return
+    face = _nearest_face(r, n, best, False, w, k)
+    if k.avoid_taken_faces:
+        open_face = _nearest_face(r, n, best, True, w, k)
+        if open_face >= 0:
+            face = open_face
+    emit(r, n, _SELECT, best, float(w.known_urgency[r, n, best]), x)
+    emit(r, n, _CANDIDATES, best, float(count), x)
+    w.mode[r, n] = _PREDOCK
+    w.target[r, n] = best
+    w.face[r, n] = face
+    w.pursuit_start[r, n] = t
+
+
+@jit
+def _directions(r: int, n: int, turn: np.ndarray, w: World, k: Constants, x: Scratch) -> None:
+    """Fresh walk directions, the correlated walk's turn, sidesteps (end of ``decide``)."""
+    push_x = w.contact[r, n, 0]
+    push_y = w.contact[r, n, 1]
+    walking = w.mode[r, n] == _WALK
+    fresh = walking and (w.redirect[r, n] or push_x != 0 or push_y != 0)
+    if fresh:
+        wx, wy = away_from(x.walk_in[r, n, 0], x.walk_in[r, n, 1], push_x, push_y)
+        w.walk[r, n, 0] = wx
+        w.walk[r, n, 1] = wy
+        w.redirect[r, n] = False
+    if k.walk_turn_ticks > 0:
+        if walking and not fresh:
+            w.walk_clock[r, n] += 1
+            if w.walk_clock[r, n] >= k.walk_turn_ticks:
+                hx = w.walk[r, n, 0]
+                hy = w.walk[r, n, 1]
+                c = turn[n, 0]
+                s = turn[n, 1]
+                rx = hx * c - hy * s
+                ry = hx * s + hy * c
+                length = math.sqrt(rx * rx + ry * ry)
+                w.walk[r, n, 0] = rx / length
+                w.walk[r, n, 1] = ry / length
+                w.walk_clock[r, n] = 0
+        if fresh:
+            w.walk_clock[r, n] = 0
+    if w.mode[r, n] == _TRANSPORT and w.stuck[r, n] >= k.stuck_ticks and w.sidestep[r, n] == 0:
+        sx, sy = away_from(x.sidestep_in[r, n, 0], x.sidestep_in[r, n, 1], push_x, push_y)
+        w.sidestep_dir[r, n, 0] = sx
+        w.sidestep_dir[r, n, 1] = sy
+        w.sidestep[r, n] = k.sidestep_ticks
+        w.stuck[r, n] = 0
+
+
+@jit
+def decide_robots(
+    r: int, t: int, lo: int, hi: int, turn: np.ndarray, w: World, k: Constants, x: Scratch
+) -> None:
+    """The ``decide`` step of tick ``t`` for robots ``lo .. hi - 1`` of run ``r``.
+
+    ``turn`` (robots, 2) is this tick's walk turn of each robot as ``(cos, sin)``.
+    """
+    for n in range(lo, hi):
+        _pursuit_check(r, n, t, w, k, x)
+        _switch_taken_face(r, n, w, k)
+        if x.before_mode[r, n] == _WALK and w.mode[r, n] == _WALK:
+            _select(r, n, t, w, k, x)
+        _directions(r, n, turn, w, k, x)

@@ -1,0 +1,236 @@
+"""After the move, compiled: the ``docking`` steps and ``world.dock``/``answer_lifts``/``deliver``.
+
+The controller's steps (``arrive_run``, ``carry_robots``) and the world's
+(``dock_robots``, ``answer_lifts``, ``deliver_run``) in the reference's
+order. Where robots compete (one robot fits under a carrier; one robot lifts
+it) the smallest id wins, found in one pass in id order with a per-carrier
+mark. ``free_faces_run`` is ``predock.free_faces`` for one run.
+"""
+
+from __future__ import annotations
+
+from swarmtag.sim.fast._events import emit
+from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, contact, maximum, minimum, norm
+from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._layout import Constants, Scratch, World
+
+__all__ = [
+    "FAILURE_LOWERED",
+    "FAILURE_NOT_PICKED_UP",
+    "answer_lifts",
+    "arrive_run",
+    "carry_robots",
+    "deliver_run",
+    "dock_robots",
+    "free_faces_run",
+]
+
+_WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
+_IDLE, _AWAITING, _PICKED_UP = 0, 1, 2
+_LIFT_EVENT, _LIFT_REFUSED, _DELIVER = 6, 7, 8
+STUCK_PROGRESS = 0.25  # docking.STUCK_PROGRESS (tests check they agree)
+
+FAILURE_NOT_PICKED_UP = 1
+"""``Scratch.failure``: a robot released a carrier whose tag is not PICKED_UP."""
+FAILURE_LOWERED = 2
+"""``Scratch.failure``: a robot lowered a carrier it does not hold, or outside the drop-off area."""
+
+
+@jit
+def _to_walk(r: int, n: int, w: World) -> None:
+    w.mode[r, n] = _WALK
+    w.target[r, n] = -1
+    w.face[r, n] = -1
+    w.timer[r, n] = 0
+    w.redirect[r, n] = True
+
+
+@jit
+def arrive_run(r: int, stamp: int, w: World, k: Constants, x: Scratch) -> None:
+    """The ``arrive`` step: stuck ticks, timers, arrivals, lift requests (``docking.arrive``).
+
+    ``stamp`` marks carriers taken under this tick (``Scratch.carrier_mark``).
+    """
+    for n in range(k.robots):
+        mode = w.mode[r, n]
+        moved = norm(
+            w.robot_pos[r, n, 0] - x.before_pos[r, n, 0],
+            w.robot_pos[r, n, 1] - x.before_pos[r, n, 1],
+        )
+        if mode == _TRANSPORT and w.sidestep[r, n] == 0 and moved < STUCK_PROGRESS * w.speed[r, n]:
+            w.stuck[r, n] += 1
+        else:
+            w.stuck[r, n] = 0
+        if mode in (_CENTRE, _LIFT, _RELEASE) and w.timer[r, n] > 0:
+            w.timer[r, n] -= 1
+        if mode in (_DOCK, _CENTRE, _LIFT):
+            x.carrier_mark[r, max(w.target[r, n], 0)] = stamp
+    # drive in: at the predock point, facing the carrier, nobody under it, smallest id first
+    for n in range(k.robots):
+        x.drive_in[r, n] = False
+        x.centred[r, n] = False
+        mode = w.mode[r, n]
+        if mode not in (_PREDOCK, _DOCK):
+            continue
+        target = max(w.target[r, n], 0)
+        cx = w.carrier_pos[r, target, 0]
+        cy = w.carrier_pos[r, target, 1]
+        rx = w.robot_pos[r, n, 0]
+        ry = w.robot_pos[r, n, 1]
+        if mode == _DOCK:
+            x.centred[r, n] = norm(rx - cx, ry - cy) <= k.arrival_tolerance
+            continue
+        face = max(w.face[r, n], 0)
+        nx = FACE_X[face]
+        ny = FACE_Y[face]
+        px = cx + nx * k.predock_offset
+        py = cy + ny * k.predock_offset
+        facing = w.heading[r, n, 0] == -nx and w.heading[r, n, 1] == -ny
+        if (
+            facing
+            and norm(rx - px, ry - py) <= k.arrival_tolerance
+            and x.carrier_mark[r, target] != stamp
+            and x.carrier_mark[r, target] != stamp + 1
+        ):
+            x.drive_in[r, n] = True
+            x.carrier_mark[r, target] = stamp + 1  # later ids arriving at it wait
+    for n in range(k.robots):
+        x.lift[r, n] = -1
+        if x.drive_in[r, n]:
+            w.mode[r, n] = _DOCK
+        elif x.centred[r, n]:
+            w.mode[r, n] = _CENTRE
+            w.timer[r, n] = k.dock_ticks
+        if w.mode[r, n] == _CENTRE and w.timer[r, n] == 0:
+            x.lift[r, n] = w.target[r, n]
+
+
+@jit
+def dock_robots(r: int, lo: int, hi: int, w: World, x: Scratch) -> None:
+    """Robots that drive in may overlap their carrier; centring ones stand on its centre."""
+    for n in range(lo, hi):
+        target = w.target[r, n]
+        if x.drive_in[r, n]:
+            w.ghost[r, n] = target
+        if x.centred[r, n]:
+            w.robot_pos[r, n, 0] = w.carrier_pos[r, target, 0]
+            w.robot_pos[r, n, 1] = w.carrier_pos[r, target, 1]
+
+
+@jit
+def answer_lifts(r: int, t: int, stamp: int, w: World, k: Constants, x: Scratch) -> bool:
+    """The tags' answers to the lift writes (``world.answer_lifts``); whether any was accepted."""
+    any_accepted = False
+    # claims are judged on the state before any lift of this tick, smallest id first
+    for n in range(k.robots):
+        x.accepted[r, n] = False
+        x.refused[r, n] = False
+        c = x.lift[r, n]
+        if c < 0:
+            continue
+        dx = w.robot_pos[r, n, 0] - w.carrier_pos[r, c, 0]
+        dy = w.robot_pos[r, n, 1] - w.carrier_pos[r, c, 1]
+        claim = (
+            w.status[r, c] == _AWAITING
+            and w.carried_by[r, c] < 0
+            and w.present[r, c]
+            and w.ghost[r, n] == c
+            and norm(dx, dy) <= k.arrival_tolerance
+        )
+        if claim and x.carrier_mark[r, c] != stamp:
+            x.carrier_mark[r, c] = stamp
+            x.accepted[r, n] = True
+            any_accepted = True
+        else:
+            x.refused[r, n] = True
+            emit(r, n, _LIFT_REFUSED, c, float(w.status[r, c]), x)
+    for n in range(k.robots):
+        if x.accepted[r, n]:
+            c = x.lift[r, n]
+            w.status[r, c] = _PICKED_UP
+            w.carried_by[r, c] = n
+            w.pickup_time[r, c] = t
+            emit(r, n, _LIFT_EVENT, c, float(w.urgency[r, c]), x)
+    return any_accepted
+
+
+@jit
+def carry_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+    """The ``carry`` step: lift, transport, release requests (``docking.carry``)."""
+    for n in range(lo, hi):
+        if x.refused[r, n]:
+            _to_walk(r, n, w)
+        if x.accepted[r, n]:
+            w.mode[r, n] = _LIFT
+            w.timer[r, n] = k.lift_ticks
+        x.raised[r, n] = w.mode[r, n] == _LIFT and w.timer[r, n] == 0
+        if x.raised[r, n]:
+            w.mode[r, n] = _TRANSPORT
+            w.stuck[r, n] = 0
+            w.sidestep[r, n] = 0
+            y = minimum(maximum(w.robot_pos[r, n, 1], k.carrier_half), k.arena - k.carrier_half)
+            w.goal[r, n, 0] = k.transport_x
+            w.goal[r, n, 1] = y
+        if w.mode[r, n] == _TRANSPORT and w.robot_pos[r, n, 0] - k.carrier_half >= k.dropoff_left:
+            w.mode[r, n] = _RELEASE
+            w.timer[r, n] = k.release_ticks
+        x.lower[r, n] = -1
+        if w.mode[r, n] == _RELEASE and w.timer[r, n] == 0:
+            x.lower[r, n] = w.target[r, n]
+            _to_walk(r, n, w)
+
+
+@jit
+def free_faces_run(r: int, w: World, k: Constants) -> None:
+    """``predock.free_faces`` for every carrier of run ``r``: inside, clear of obstacles."""
+    low = k.robot_radius
+    high = k.arena - k.robot_radius
+    for c in range(k.carriers):
+        cx = w.carrier_pos[r, c, 0]
+        cy = w.carrier_pos[r, c, 1]
+        for face in range(4):
+            px = cx + FACE_X[face] * k.predock_offset
+            py = cy + FACE_Y[face] * k.predock_offset
+            free = low <= px <= high and low <= py <= high
+            if free:
+                for other in range(k.carriers):
+                    if other == c or not w.present[r, other] or w.carried_by[r, other] >= 0:
+                        continue
+                    _, _, depth = contact(
+                        px - w.carrier_pos[r, other, 0],
+                        py - w.carrier_pos[r, other, 1],
+                        k.carrier_half,
+                        k.robot_radius,
+                        1.0,
+                    )
+                    if depth > 0:
+                        free = False
+                        break
+            w.free_face[r, c, face] = free
+
+
+@jit
+def deliver_run(r: int, t: int, lifted: bool, w: World, k: Constants, x: Scratch) -> None:
+    """Drive-offs, set-downs and IDLE writes (``world.deliver``); free faces after a lift."""
+    for n in range(k.robots):
+        if x.raised[r, n]:
+            w.ghost[r, n] = -1
+    for n in range(k.robots):
+        c = x.lower[r, n]
+        if c < 0:
+            continue
+        if w.status[r, c] != _PICKED_UP:
+            x.failure[r] = FAILURE_NOT_PICKED_UP
+            continue
+        if w.carried_by[r, c] != n or not w.robot_pos[r, n, 0] - k.carrier_half >= k.dropoff_left:
+            x.failure[r] = FAILURE_LOWERED
+            continue
+        w.status[r, c] = _IDLE
+        w.present[r, c] = False
+        w.carried_by[r, c] = -1
+        w.delivery_time[r, c] = t
+        w.deliverer[r, c] = n
+        w.delivery_urgency[r, c] = w.urgency[r, c]
+        emit(r, n, _DELIVER, c, float(w.urgency[r, c]), x)
+    if lifted:
+        free_faces_run(r, w, k)

@@ -1,0 +1,287 @@
+"""What the compiled kernel is given: the world's arrays, its parameters, its scratch space.
+
+``World`` holds the arrays of ``WorldState`` under the same names (the
+kernel changes them in place; ``world_of``/``state_of`` convert without
+copying), plus each run's own tick. ``Constants`` is ``Params`` as plain
+numbers (the policy as a kind and a parameter, ``policy_code``). ``Scratch``
+is per-run working space the kernel reuses every tick, and the per-run event
+buffers it fills (``Scratch.event_*``): every array has the run axis first, so
+runs never share memory and a parallel loop over runs needs no locks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields, replace
+from typing import Final, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag.sim.params import Params
+from swarmtag.sim.state import WorldState
+
+__all__ = [
+    "EVENT_SLOTS",
+    "Constants",
+    "Scratch",
+    "World",
+    "constants_of",
+    "policy_code",
+    "scratch_for",
+    "state_of",
+    "world_of",
+]
+
+F8 = NDArray[np.float64]
+I8 = NDArray[np.int64]
+B1 = NDArray[np.bool_]
+S1 = NDArray[np.int8]
+
+EVENT_SLOTS: Final = 8
+"""Robot event kinds (``EventKind`` 1-8); a robot has at most one of each per tick."""
+
+
+class World(NamedTuple):
+    """The arrays of ``WorldState`` (same names, same shapes) and each run's tick."""
+
+    run_tick: I8
+    run_ids: I8
+    robot_pos: F8
+    heading: F8
+    walk: F8
+    speed: F8
+    mode: S1
+    target: I8
+    face: I8
+    pursuit_start: I8
+    timer: I8
+    ghost: I8
+    redirect: B1
+    contact: F8
+    stuck: I8
+    sidestep: I8
+    sidestep_dir: F8
+    goal: F8
+    blocked_until: I8
+    known_status: S1
+    known_urgency: S1
+    heard_tick: I8
+    seen_tick: I8
+    seen_pos: F8
+    walk_clock: I8
+    carrier_pos: F8
+    status: S1
+    urgency: S1
+    present: B1
+    carried_by: I8
+    w0: F8
+    urgency0: S1
+    order_time: F8
+    free_face: B1
+    advert_phase: I8
+    adv_status: S1
+    adv_urgency: S1
+    pickup_time: I8
+    delivery_time: I8
+    deliverer: I8
+    delivery_urgency: S1
+    ended_at: I8
+    operator_counter: I8
+
+
+class Constants(NamedTuple):
+    """``Params`` as the numbers the kernel reads (lengths in metres, times in ticks)."""
+
+    robots: int
+    carriers: int
+    arena: float
+    dropoff_left: float
+    robot_radius: float
+    carrier_half: float
+    turn_cos: float
+    turn_sin: float
+    detection_radius: float
+    split: bool
+    radio_range: float
+    camera_range: float
+    occlusion: int
+    memory_ticks: int
+    tick_us: int
+    advert_us: int
+    walk_turn_ticks: int
+    avoid_taken_faces: bool
+    predock_offset: float
+    arrival_tolerance: float
+    transport_x: float
+    dock_ticks: int
+    lift_ticks: int
+    release_ticks: int
+    timeout_ticks: int
+    cooldown_ticks: int
+    stuck_ticks: int
+    sidestep_ticks: int
+    collision_iterations: int
+    run_ticks: int
+    growing: bool
+    horizon: float
+    advertisement_loss: float
+    status_delay: int
+    detection_noise: float
+    breakdown: float
+    policy_kind: int
+    policy_parameter: float
+
+
+class Scratch(NamedTuple):
+    """Per-run working space, reused every tick, and the event buffers."""
+
+    before_mode: S1
+    before_pos: F8
+    walk_in: F8
+    sidestep_in: F8
+    breakdown_draw: F8
+    radio_draw: F8
+    noise: F8
+    known: B1
+    measured: F8
+    proposed: F8
+    x: F8
+    y: F8
+    new_x: F8
+    new_y: F8
+    extent: F8
+    radius: F8
+    movable: B1
+    drive_in: B1
+    centred: B1
+    lift: I8
+    accepted: B1
+    refused: B1
+    raised: B1
+    lower: I8
+    carrier_mark: I8
+    advertises: B1
+    slot_on: B1
+    slot_carrier: I8
+    slot_value: F8
+    failure: I8
+    event_count: I8
+    """Rows in each run's event buffer; the buffers are the (R, capacity) ``event_*`` arrays."""
+    event_tick: I8
+    event_kind: S1
+    event_robot: I8
+    event_carrier: I8
+    event_value: F8
+
+
+def policy_code(params: Params) -> tuple[int, float]:
+    """The policy as the kernel's ``(kind, parameter)``: see ``swarmtag.policy.kernel_form``."""
+    kind, parameter = params.policy.kernel_form
+    return kind, parameter
+
+
+def constants_of(params: Params) -> Constants:
+    """The kernel's constants for ``params``."""
+    kind, parameter = policy_code(params)
+    return Constants(
+        robots=params.robots,
+        carriers=params.carriers,
+        arena=params.arena,
+        dropoff_left=params.dropoff_left,
+        robot_radius=params.robot_radius,
+        carrier_half=params.carrier_half,
+        turn_cos=params.turn_cos,
+        turn_sin=params.turn_sin,
+        detection_radius=params.detection_radius,
+        split=params.split,
+        radio_range=params.radio_range,
+        camera_range=params.camera_range,
+        occlusion=params.occlusion,
+        memory_ticks=params.memory_ticks,
+        tick_us=params.tick_us,
+        advert_us=params.advert_us,
+        walk_turn_ticks=params.walk_turn_ticks,
+        avoid_taken_faces=params.avoid_taken_faces,
+        predock_offset=params.predock_offset,
+        arrival_tolerance=params.arrival_tolerance,
+        transport_x=params.transport_x,
+        dock_ticks=params.dock_ticks,
+        lift_ticks=params.lift_ticks,
+        release_ticks=params.release_ticks,
+        timeout_ticks=params.timeout_ticks,
+        cooldown_ticks=params.cooldown_ticks,
+        stuck_ticks=params.stuck_ticks,
+        sidestep_ticks=params.sidestep_ticks,
+        collision_iterations=params.collision_iterations,
+        run_ticks=params.run_ticks,
+        growing=params.growing,
+        horizon=params.horizon,
+        advertisement_loss=params.advertisement_loss,
+        status_delay=params.status_delay,
+        detection_noise=params.detection_noise,
+        breakdown=params.breakdown,
+        policy_kind=kind,
+        policy_parameter=parameter,
+    )
+
+
+def world_of(state: WorldState) -> World:
+    """The kernel's view of a copy of ``state``: every run at ``state.tick``."""
+    copy = state.copy()
+    arrays = {f.name: getattr(copy, f.name) for f in fields(WorldState) if f.name in World._fields}
+    return World(run_tick=np.full(state.runs, state.tick, dtype=np.int64), **arrays)
+
+
+def state_of(world: World, template: WorldState) -> WorldState:
+    """``world``'s arrays as a ``WorldState`` (no copy) at the latest tick any run reached."""
+    arrays = {name: getattr(world, name) for name in World._fields if name != "run_tick"}
+    tick = int(world.run_tick.max()) if world.run_tick.size else template.tick
+    return replace(template, tick=tick, **arrays)
+
+
+def scratch_for(runs: int, robots: int, carriers: int, capacity: int) -> Scratch:
+    """Working space for ``runs`` runs and event buffers of ``capacity`` rows per run."""
+    n, c = (runs, robots), (runs, carriers)
+    nc = (runs, robots, carriers)
+
+    def floats(*shape: int) -> F8:
+        return np.zeros(shape, dtype=np.float64)
+
+    return Scratch(
+        before_mode=np.zeros(n, dtype=np.int8),
+        before_pos=floats(*n, 2),
+        walk_in=floats(*n, 2),
+        sidestep_in=floats(*n, 2),
+        breakdown_draw=floats(*n),
+        radio_draw=floats(*nc),
+        noise=floats(*nc, 2),
+        known=np.zeros(nc, dtype=bool),
+        measured=floats(*nc),
+        proposed=floats(*n, 2),
+        x=floats(*n),
+        y=floats(*n),
+        new_x=floats(*n),
+        new_y=floats(*n),
+        extent=floats(*n),
+        radius=floats(*n),
+        movable=np.zeros(n, dtype=bool),
+        drive_in=np.zeros(n, dtype=bool),
+        centred=np.zeros(n, dtype=bool),
+        lift=np.full(n, -1, dtype=np.int64),
+        accepted=np.zeros(n, dtype=bool),
+        refused=np.zeros(n, dtype=bool),
+        raised=np.zeros(n, dtype=bool),
+        lower=np.full(n, -1, dtype=np.int64),
+        carrier_mark=np.full(c, -1, dtype=np.int64),
+        advertises=np.zeros(c, dtype=bool),
+        slot_on=np.zeros((*n, EVENT_SLOTS), dtype=bool),
+        slot_carrier=np.zeros((*n, EVENT_SLOTS), dtype=np.int64),
+        slot_value=np.zeros((*n, EVENT_SLOTS)),
+        failure=np.zeros(runs, dtype=np.int64),
+        event_count=np.zeros(runs, dtype=np.int64),
+        event_tick=np.zeros((runs, capacity), dtype=np.int64),
+        event_kind=np.zeros((runs, capacity), dtype=np.int8),
+        event_robot=np.zeros((runs, capacity), dtype=np.int64),
+        event_carrier=np.zeros((runs, capacity), dtype=np.int64),
+        event_value=np.zeros((runs, capacity)),
+    )

@@ -1,0 +1,188 @@
+"""Move and resolve collisions, compiled: ``sim/motion.py`` for one run.
+
+``move_robots`` proposes each robot's position and turns its heading;
+``resolve_run`` runs the Jacobi passes (every push from the positions at the
+start of the pass, sums over touching bodies in index order from 0.0, then
+the walls) and writes the outcome. A pass that moves nobody in the run is a
+fixed point, so the run's remaining passes are skipped: the reference stops
+when that holds for the whole batch, and extra passes at a fixed point change
+nothing.
+"""
+
+from __future__ import annotations
+
+import math
+
+from swarmtag.sim.fast._geometry import (
+    FACE_X,
+    FACE_Y,
+    contact,
+    maximum,
+    minimum,
+    step_towards,
+    turn_towards,
+)
+from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._layout import Constants, Scratch, World
+
+__all__ = ["move_robots", "resolve_run"]
+
+_WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
+
+
+@jit
+def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+    """Proposed positions, turned headings, sidesteps counted down (``motion.move``)."""
+    for n in range(lo, hi):
+        mode = w.mode[r, n]
+        px = w.robot_pos[r, n, 0]
+        py = w.robot_pos[r, n, 1]
+        speed = w.speed[r, n]
+        face = max(w.face[r, n], 0)
+        target = max(w.target[r, n], 0)
+        nx = FACE_X[face]
+        ny = FACE_Y[face]
+        if mode == _WALK:
+            qx = px + w.walk[r, n, 0] * speed
+            qy = py + w.walk[r, n, 1] * speed
+        elif mode == _TRANSPORT and w.sidestep[r, n] > 0:
+            qx = px + w.sidestep_dir[r, n, 0] * speed
+            qy = py + w.sidestep_dir[r, n, 1] * speed
+            w.sidestep[r, n] -= 1
+        elif mode == _PREDOCK:
+            cx = w.carrier_pos[r, target, 0]
+            cy = w.carrier_pos[r, target, 1]
+            qx, qy = step_towards(
+                px, py, cx + nx * k.predock_offset, cy + ny * k.predock_offset, speed
+            )
+        elif mode == _DOCK:
+            qx, qy = step_towards(
+                px, py, w.carrier_pos[r, target, 0], w.carrier_pos[r, target, 1], speed
+            )
+        elif mode == _TRANSPORT:
+            qx, qy = step_towards(px, py, w.goal[r, n, 0], w.goal[r, n, 1], speed)
+        else:
+            qx = px
+            qy = py
+        x.proposed[r, n, 0] = qx
+        x.proposed[r, n, 1] = qy
+
+        tx = qx - px
+        ty = qy - py
+        distance = math.sqrt(tx * tx + ty * ty)
+        if mode == _PREDOCK:
+            fx = -nx
+            fy = -ny
+        elif mode == _WALK:
+            fx = w.walk[r, n, 0]
+            fy = w.walk[r, n, 1]
+        else:
+            safe = distance if distance > 0 else 1.0
+            fx = tx / safe
+            fy = ty / safe
+        if mode in (_PREDOCK, _WALK) or (mode == _TRANSPORT and distance > 0):
+            hx, hy = turn_towards(
+                w.heading[r, n, 0], w.heading[r, n, 1], fx, fy, k.turn_cos, k.turn_sin
+            )
+            w.heading[r, n, 0] = hx
+            w.heading[r, n, 1] = hy
+
+
+@jit
+def _bodies(r: int, w: World, k: Constants, x: Scratch) -> None:
+    """Each robot's rounded box and whether it can be pushed (``motion._bodies``)."""
+    for n in range(k.robots):
+        mode = w.mode[r, n]
+        loaded = (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and w.target[r, n] >= 0
+        x.extent[r, n] = k.carrier_half if loaded else 0.0
+        x.radius[r, n] = 0.0 if loaded else k.robot_radius
+        x.movable[r, n] = not (mode in (_CENTRE, _LIFT) or mode >= _RELEASE)
+
+
+@jit
+def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
+    """One Jacobi pass from ``x.x, x.y`` into ``x.new_x, x.new_y``; whether anyone moved."""
+    moved = False
+    half = k.carrier_half
+    for n in range(k.robots):
+        xn = x.x[r, n]
+        yn = x.y[r, n]
+        extent = x.extent[r, n]
+        radius = x.radius[r, n]
+        movable = x.movable[r, n]
+        robot_x = 0.0
+        robot_y = 0.0
+        carrier_x = 0.0
+        carrier_y = 0.0
+        if movable:
+            for m in range(k.robots):
+                if m == n:
+                    continue
+                share = 0.5 if x.movable[r, m] else 1.0
+                pair_extent = extent + x.extent[r, m]
+                pair_radius = radius + x.radius[r, m]
+                reach = pair_extent + pair_radius
+                dx = xn - x.x[r, m]
+                dy = yn - x.y[r, m]
+                if abs(dx) < reach and abs(dy) < reach:
+                    push_x, push_y, _ = contact(
+                        dx, dy, pair_extent, pair_radius, -1.0 if n < m else 1.0
+                    )
+                    robot_x += push_x * share
+                    robot_y += push_y * share
+            ghost = w.ghost[r, n]
+            reach = (extent + half) + radius
+            for c in range(k.carriers):
+                if c == ghost or not w.present[r, c] or w.carried_by[r, c] >= 0:
+                    continue
+                dx = xn - w.carrier_pos[r, c, 0]
+                dy = yn - w.carrier_pos[r, c, 1]
+                if abs(dx) < reach and abs(dy) < reach:
+                    push_x, push_y, _ = contact(dx, dy, extent + half, radius, 1.0)
+                    carrier_x += push_x
+                    carrier_y += push_y
+        margin = extent + radius
+        high = k.arena - margin
+        new_x = minimum(maximum((xn + robot_x) + carrier_x, margin), high)
+        new_y = minimum(maximum((yn + robot_y) + carrier_y, margin), high)
+        x.new_x[r, n] = new_x
+        x.new_y[r, n] = new_y
+        if new_x != xn or new_y != yn:
+            moved = True
+    return moved
+
+
+@jit
+def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
+    """Resolve collisions of the proposed positions of run ``r`` (``motion.resolve``)."""
+    _bodies(r, w, k, x)
+    for n in range(k.robots):
+        x.x[r, n] = x.proposed[r, n, 0]
+        x.y[r, n] = x.proposed[r, n, 1]
+    for _ in range(k.collision_iterations):
+        moved = _collision_pass(r, w, k, x)
+        for n in range(k.robots):
+            x.x[r, n] = x.new_x[r, n]
+            x.y[r, n] = x.new_y[r, n]
+        if not moved:
+            break
+    for n in range(k.robots):
+        w.contact[r, n, 0] = x.x[r, n] - x.proposed[r, n, 0]
+        w.contact[r, n, 1] = x.y[r, n] - x.proposed[r, n, 1]
+        w.robot_pos[r, n, 0] = x.x[r, n]
+        w.robot_pos[r, n, 1] = x.y[r, n]
+    for n in range(k.robots):
+        if x.extent[r, n] > 0:  # loaded: its carrier goes with it
+            target = w.target[r, n]
+            w.carrier_pos[r, target, 0] = x.x[r, n]
+            w.carrier_pos[r, target, 1] = x.y[r, n]
+    for n in range(k.robots):
+        ghost = w.ghost[r, n]
+        if ghost < 0:
+            continue
+        dx = w.robot_pos[r, n, 0] - w.carrier_pos[r, ghost, 0]
+        dy = w.robot_pos[r, n, 1] - w.carrier_pos[r, ghost, 1]
+        _, _, depth = contact(dx, dy, x.extent[r, n] + k.carrier_half, x.radius[r, n], 1.0)
+        mode = w.mode[r, n]
+        if depth <= 0 and mode not in (_DOCK, _CENTRE):
+            w.ghost[r, n] = -1

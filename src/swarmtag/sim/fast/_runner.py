@@ -1,0 +1,292 @@
+"""The compiled backend's driver: seeded runs through ``advance``, results as the reference's.
+
+``simulate_fast`` takes the same start state and master seed as the
+reference ``run_batch`` with a ``RandomSource`` and gives the same results:
+the kernel draws from each run's own streams, the walk turns are drawn here
+with ``randomness.walk_turns``, operator writes are applied between kernel
+calls with ``wms.operator_writes`` (the kernel stops every run at each tick
+that has writes), and events come out of the kernel's per-run buffers into
+the same ``EventRecorder``. Groups of runs go to a pool of threads (the
+kernel holds no GIL). Kernel calls are bounded in work, so Ctrl-C is seen
+between them; a recorded (or checked) batch steps one tick per call so that
+each tick can be looked at.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import Final
+
+import numpy as np
+from numba.typed import List
+
+from swarmtag._interrupt import checkpoint
+from swarmtag.errors import SimulationError
+from swarmtag.io import MISSING_ID
+from swarmtag.sim.events import EventKind, EventRecorder, RobotEvents, TickEvents
+from swarmtag.sim.fast._docking import FAILURE_LOWERED, FAILURE_NOT_PICKED_UP
+from swarmtag.sim.fast._layout import (
+    EVENT_SLOTS,
+    Scratch,
+    World,
+    constants_of,
+    scratch_for,
+    state_of,
+    world_of,
+)
+from swarmtag.sim.fast._tick import advance
+from swarmtag.sim.invariants import check_tick
+from swarmtag.sim.params import Params
+from swarmtag.sim.randomness import Stream, check_seed, due_writes, stream, walk_turns
+from swarmtag.sim.state import WorldState
+from swarmtag.sim.trajectories import TrajectoryRecorder
+from swarmtag.sim.wms import operator_writes
+
+__all__ = ["default_threads", "simulate_fast"]
+
+_WORK_PER_CALL: Final = 2_000_000
+"""Robot-ticks per kernel call at most (about 0.1-0.2 s): bounds Ctrl-C latency and turn blocks."""
+_MAX_TICKS_PER_CALL: Final = 4096
+_GROUPS_PER_THREAD: Final = 4
+"""Runs go to the threads in this many groups per thread (runs end at different ticks)."""
+
+
+def _capacity(robots: int) -> int:
+    """Rows of each run's event buffer (a run pauses when a tick could overflow it)."""
+    return max(256, 4 * EVENT_SLOTS * robots)
+
+
+def default_threads() -> int:
+    """Threads the compiled backend uses: ``SWARMTAG_THREADS``, else the usable cores."""
+    text = os.environ.get("SWARMTAG_THREADS", "")
+    if text.isdigit() and int(text) >= 1:
+        return int(text)
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+class _Streams:
+    """Each run's generators of the kernel's streams (a dummy where a stream is off)."""
+
+    def __init__(self, params: Params, seed: int, run_ids: list[int]) -> None:
+        dummy = np.random.default_rng(0)
+
+        def generators(purpose: Stream, active: bool) -> Sequence[np.random.Generator]:
+            listed: Sequence[np.random.Generator] = List(
+                [stream(seed, run, purpose) if active else dummy for run in run_ids]
+            )
+            return listed
+
+        self.motion = generators(Stream.MOTION, True)
+        self.breakdown = generators(Stream.BREAKDOWN, params.breakdown > 0)
+        self.radio = generators(Stream.RADIO, params.advertisement_loss > 0)
+        self.camera = generators(Stream.CAMERA, params.detection_noise > 0)
+        self._walk = (
+            [stream(seed, run, Stream.WALK) for run in run_ids]
+            if params.walk_turn_ticks > 0
+            else None
+        )
+        self._params = params
+        self._runs = len(run_ids)
+
+    def turns(self, ticks: int) -> np.ndarray:
+        """The next ``ticks`` ticks' walk turns, shape (runs, ticks, robots, 2)."""
+        robots = self._params.robots
+        if self._walk is None:
+            return np.zeros((self._runs, 1, robots, 2))
+        uniform = np.stack([g.random((ticks, robots)) for g in self._walk])
+        return walk_turns(uniform, self._params)
+
+
+def _flush(x: Scratch, recorder: EventRecorder, breakdowns: np.ndarray) -> None:
+    """Move the kernel's buffered events into ``recorder`` and empty the buffers."""
+    counts = x.event_count
+    if not counts.any():
+        return
+    rows = np.arange(x.event_tick.shape[1])[None, :] < counts[:, None]
+    runs = np.nonzero(rows)[0]
+    kinds = x.event_kind[rows].astype(np.int64)
+    recorder.add_rows(
+        runs,
+        x.event_tick[rows],
+        kinds,
+        carriers=x.event_carrier[rows],
+        robots=x.event_robot[rows],
+        values=x.event_value[rows],
+    )
+    breakdowns += np.bincount(runs[kinds == EventKind.BREAKDOWN], minlength=breakdowns.shape[0])
+    counts[:] = 0
+
+
+def _tick_events(x: Scratch, shape: tuple[int, int]) -> TickEvents:
+    """The buffered events of one tick as ``TickEvents`` (checking mode)."""
+    result = TickEvents()
+    for kind in range(1, EVENT_SLOTS + 1):
+        mask = np.zeros(shape, dtype=bool)
+        carrier = np.full(shape, -1, dtype=np.int64)
+        value = np.full(shape, np.nan)
+        for run in range(shape[0]):
+            for row in range(int(x.event_count[run])):
+                if x.event_kind[run, row] == kind:
+                    robot = int(x.event_robot[run, row])
+                    mask[run, robot] = True
+                    carrier[run, robot] = x.event_carrier[run, row]
+                    value[run, robot] = x.event_value[run, row]
+        if mask.any():
+            result.entries.append(RobotEvents(EventKind(kind), mask, carrier, value))
+    return result
+
+
+def _raise_failure(x: Scratch, world: World) -> None:
+    """A ``SimulationError`` for a run in which the kernel refused a release."""
+    failed = np.flatnonzero(x.failure)
+    if failed.size == 0:
+        return
+    row = int(failed[0])
+    tick = int(world.run_tick[row]) + 1
+    if x.failure[row] == FAILURE_NOT_PICKED_UP:
+        msg = f"tick {tick}: a robot released a carrier whose tag is not PICKED_UP"
+    else:
+        assert x.failure[row] == FAILURE_LOWERED
+        msg = (
+            f"tick {tick}: a robot lowered a carrier it does not hold, or outside the "
+            "drop-off area (the model delivers only into the drop-off area)"
+        )
+    raise SimulationError(msg)
+
+
+class _Batch:
+    """One seeded batch in the compiled kernel: its arrays, streams, events and threads."""
+
+    def __init__(self, state: WorldState, params: Params, seed: int, threads: int) -> None:
+        runs, robots = state.runs, params.robots
+        self.template = state
+        self.params = params
+        self.world = world_of(state)
+        self.constants = constants_of(params)
+        self.scratch = scratch_for(runs, robots, params.carriers, capacity=_capacity(robots))
+        self.streams = _Streams(params, seed, [int(run) for run in state.run_ids])
+        self.events = EventRecorder()
+        self.breakdowns = np.zeros(runs, dtype=np.int64)
+        threads = max(1, min(threads, runs))
+        count = min(runs, threads * _GROUPS_PER_THREAD) if threads > 1 else 1
+        self.groups = [np.arange(g, runs, count, dtype=np.int64) for g in range(count)]
+        self.pool = ThreadPoolExecutor(threads) if threads > 1 else None
+
+    def close(self) -> None:
+        """Stop the threads (each finishes its bounded kernel call)."""
+        if self.pool is not None:
+            self.pool.shutdown()
+
+    def _kernel(self, rows: np.ndarray, stop: int, turns: np.ndarray, first: int) -> None:
+        s = self.streams
+        advance(
+            rows,
+            stop,
+            turns,
+            first,
+            s.motion,
+            s.breakdown,
+            s.radio,
+            s.camera,
+            self.world,
+            self.constants,
+            self.scratch,
+        )
+
+    def advance_to(self, stop: int, turns: np.ndarray, first: int) -> None:
+        """Every running run to tick ``stop`` (empties buffers a run filled on the way)."""
+        world = self.world
+        while True:
+            if self.pool is None:
+                self._kernel(self.groups[0], stop, turns, first)
+            else:
+                futures = [
+                    self.pool.submit(self._kernel, rows, stop, turns, first) for rows in self.groups
+                ]
+                for future in futures:
+                    future.result()
+            _raise_failure(self.scratch, world)
+            if not ((world.ended_at < 0) & (world.run_tick < stop)).any():
+                return
+            self.flush()  # a run paused with a full event buffer
+
+    def flush(self) -> None:
+        """Move buffered events into the recorder."""
+        _flush(self.scratch, self.events, self.breakdowns)
+
+    def state(self) -> WorldState:
+        """The batch's arrays as a ``WorldState`` (no copy)."""
+        return state_of(self.world, self.template)
+
+    def write(self, current: WorldState, t: int, tick_events: TickEvents | None) -> None:
+        """Apply the operator writes due at tick ``t`` (every running run is at ``t``)."""
+        writes = due_writes(self.params, t)
+        if not writes:
+            return
+        done = TickEvents()
+        operator_writes(current, writes, t=t, events=done)
+        for event in done.carrier_entries:
+            self.events.add_rows(
+                np.array([event.run]),
+                np.array([t]),
+                np.array([int(event.kind)]),
+                carriers=np.array([event.carrier]),
+                robots=np.array([MISSING_ID]),
+                values=np.array([event.value]),
+            )
+        if tick_events is not None:
+            tick_events.carrier_entries.extend(done.carrier_entries)
+
+
+def simulate_fast(
+    state: WorldState,
+    params: Params,
+    *,
+    seed: int,
+    ticks: int | None = None,
+    record: bool = False,
+    check: bool = False,
+    threads: int | None = None,
+) -> tuple[WorldState, EventRecorder, np.ndarray, TrajectoryRecorder | None]:
+    """Run the seeded batch ``state`` with the compiled kernel on ``threads`` threads.
+
+    Returns the final state, the events, the breakdowns per run and, with
+    ``record``, the trajectories recorded tick by tick (as ``run_batch``).
+    """
+    seed = check_seed(seed)
+    start = state.tick
+    end = params.run_ticks if ticks is None else start + ticks
+    batch = _Batch(state, params, seed, default_threads() if threads is None else threads)
+    trajectories = TrajectoryRecorder(state, end - start) if record else None
+    write_ticks = sorted({w.tick for w in params.scenario.reprioritisations})
+    stepwise = record or check
+    per_call = max(
+        1, min(_MAX_TICKS_PER_CALL, _WORK_PER_CALL // max(1, state.runs * params.robots))
+    )
+    position = start
+    current = state
+    try:
+        while position < end and (batch.world.ended_at < 0).any():
+            checkpoint()  # Ctrl-C between kernel calls
+            stop = min(end, position + (1 if stepwise else per_call))
+            stop = min([stop, *(t for t in write_ticks if t > position)])
+            before = current.copy() if check else None
+            batch.advance_to(stop, batch.streams.turns(stop - position), position + 1)
+            current = batch.state()
+            tick_events = (
+                _tick_events(batch.scratch, (state.runs, params.robots)) if check else None
+            )
+            batch.write(current, stop, tick_events)
+            batch.flush()
+            if before is not None and tick_events is not None:
+                check_tick(before, current, tick_events, params)
+            if trajectories is not None:
+                trajectories.add(current)
+            position = stop
+    finally:
+        batch.close()
+    return current, batch.events, batch.breakdowns, trajectories

@@ -1,0 +1,160 @@
+"""One compiled tick of one run, and the loop that advances every run of a batch.
+
+``tick_run`` is ``kernel.step`` for run ``r`` (the phases in the reference's
+order, then the tick's events into the run's buffer). ``advance`` runs some
+runs of the batch, each on its own until it ends, reaches ``until`` or its
+event buffer could overflow; the caller empties the buffers and calls again.
+It holds no GIL, so the caller runs groups of runs on several threads at
+once: runs share no memory. Random numbers come from each run's own
+generators, the very streams the reference draws (``RandomSource``), in the
+same order; the correlated walk's turns come ready-made from the caller.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from swarmtag.sim.fast._decide import break_down_robots, decide_robots
+from swarmtag.sim.fast._docking import (
+    answer_lifts,
+    arrive_run,
+    carry_robots,
+    deliver_run,
+    dock_robots,
+)
+from swarmtag.sim.fast._events import flush_slots, room_for_tick
+from swarmtag.sim.fast._jit import counted, jit
+from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._motion import move_robots, resolve_run
+from swarmtag.sim.fast._sense import sense_robots, tags_advertising
+
+__all__ = ["advance", "tick_run"]
+
+
+@jit
+def _unit(g0: float, g1: float) -> tuple[float, float]:
+    """``randomness.unit_vectors`` for one pair of Gaussian numbers."""
+    length = math.sqrt(g0 * g0 + g1 * g1)
+    if length == 0:
+        return 1.0, 0.0
+    return g0 / length, g1 / length
+
+
+@jit
+def _draw(
+    r: int,
+    motion: np.random.Generator,
+    breakdown: np.random.Generator,
+    radio: np.random.Generator,
+    camera: np.random.Generator,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """This tick's numbers of each active stream, in the order ``RandomSource`` draws them."""
+    for n in range(k.robots):
+        g0 = motion.standard_normal()
+        g1 = motion.standard_normal()
+        g2 = motion.standard_normal()
+        g3 = motion.standard_normal()
+        x.walk_in[r, n, 0], x.walk_in[r, n, 1] = _unit(g0, g1)
+        x.sidestep_in[r, n, 0], x.sidestep_in[r, n, 1] = _unit(g2, g3)
+    if k.breakdown > 0:
+        for n in range(k.robots):
+            x.breakdown_draw[r, n] = breakdown.random()
+    if k.advertisement_loss > 0:
+        for n in range(k.robots):
+            for c in range(k.carriers):
+                x.radio_draw[r, n, c] = radio.random()
+    if k.detection_noise > 0:
+        for n in range(k.robots):
+            for c in range(k.carriers):
+                x.noise[r, n, c, 0] = camera.standard_normal() * k.detection_noise
+                x.noise[r, n, c, 1] = camera.standard_normal() * k.detection_noise
+
+
+@jit
+def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
+    """Grow urgencies, record what the tags advertise, end the run (``kernel._end_of_tick``)."""
+    slot = t % (k.status_delay + 1)
+    remaining = False
+    for c in range(k.carriers):
+        w0 = w.w0[r, c]
+        if not math.isnan(w0):
+            grown = math.floor(9.0 * (w0 + t) / k.horizon)
+            w.urgency[r, c] = min(9, grown)
+        w.adv_status[r, slot, c] = w.status[r, c]
+        w.adv_urgency[r, slot, c] = w.urgency[r, c]
+        if w.present[r, c]:
+            remaining = True
+    if w.ended_at[r] < 0 and (not remaining or t >= k.run_ticks):
+        w.ended_at[r] = t
+
+
+@jit
+def tick_run(
+    r: int,
+    t: int,
+    turn: np.ndarray,
+    motion: np.random.Generator,
+    breakdown: np.random.Generator,
+    radio: np.random.Generator,
+    camera: np.random.Generator,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """Tick ``t`` of run ``r``: every phase of ``kernel.step`` but the operator writes."""
+    robots = k.robots
+    _draw(r, motion, breakdown, radio, camera, k, x)
+    for n in range(robots):
+        x.before_mode[r, n] = w.mode[r, n]
+        x.before_pos[r, n, 0] = w.robot_pos[r, n, 0]
+        x.before_pos[r, n, 1] = w.robot_pos[r, n, 1]
+    if k.split:
+        tags_advertising(r, t, w, k, x)
+    sense_robots(r, t, 0, robots, w, k, x)
+    break_down_robots(r, 0, robots, w, k, x)
+    decide_robots(r, t, 0, robots, turn, w, k, x)
+    move_robots(r, 0, robots, w, k, x)
+    resolve_run(r, w, k, x)
+    arrive_run(r, 4 * t, w, k, x)
+    dock_robots(r, 0, robots, w, x)
+    lifted = answer_lifts(r, t, 4 * t + 2, w, k, x)
+    carry_robots(r, 0, robots, w, k, x)
+    deliver_run(r, t, lifted, w, k, x)
+    _end_of_tick(r, t, w, k)
+    flush_slots(r, t, robots, x)
+
+
+@counted
+def advance(
+    rows: np.ndarray,
+    until: int,
+    turns: np.ndarray,
+    turns_from: int,
+    motion: Sequence[np.random.Generator],
+    breakdown: Sequence[np.random.Generator],
+    radio: Sequence[np.random.Generator],
+    camera: Sequence[np.random.Generator],
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """Advance the runs ``rows`` to tick ``until`` (or their end, or until a buffer is full).
+
+    ``turns[r, t - turns_from]`` holds run ``r``'s walk turns of tick ``t``
+    (``(cos, sin)`` per robot) when the walk turns; ``motion`` ... ``camera``
+    are typed lists of each run's generators.
+    """
+    for i in range(rows.shape[0]):
+        r = rows[i]
+        while w.ended_at[r] < 0 and w.run_tick[r] < until and x.failure[r] == 0:
+            if not room_for_tick(r, k.robots, x):
+                break
+            t = w.run_tick[r] + 1
+            turn = turns[r, t - turns_from] if k.walk_turn_ticks > 0 else turns[r, 0]
+            tick_run(r, t, turn, motion[r], breakdown[r], radio[r], camera[r], w, k, x)
+            w.run_tick[r] = t

@@ -1,0 +1,52 @@
+"""Comparing the compiled backend with the reference: the same bytes, the same final state."""
+
+from __future__ import annotations
+
+from dataclasses import fields
+
+import numpy as np
+
+from swarmtag.policy import Policy
+from swarmtag.sim import Scenario, SimResult, WorldState, run_csv, simulate
+
+
+def assert_same(reference: SimResult, fast: SimResult) -> None:
+    """Identical event logs per run, identical final states and per-run counts."""
+    assert reference.run_ids.tolist() == fast.run_ids.tolist()
+    for run in reference.run_ids.tolist():
+        assert run_csv(reference, run) == run_csv(fast, run), f"run {run} differs"
+    assert reference.final_state.tick == fast.final_state.tick
+    for field in fields(WorldState):
+        ours = getattr(reference.final_state, field.name)
+        theirs = getattr(fast.final_state, field.name)
+        if isinstance(ours, np.ndarray):
+            assert ours.dtype == theirs.dtype, field.name
+            assert np.array_equal(ours, theirs, equal_nan=True), field.name
+    for name in ("delivered", "undelivered", "stuck", "breakdowns", "end_tick"):
+        assert getattr(reference, name).tolist() == getattr(fast, name).tolist(), name
+
+
+def compare(
+    scenario: Scenario,
+    policy: Policy,
+    *,
+    seed: int,
+    runs: int,
+    run_offset: int = 0,
+    **options: object,
+) -> SimResult:
+    """Run both backends on the same runs, assert they agree; the fast result."""
+    reference = simulate(
+        scenario,
+        policy,
+        seed=seed,
+        runs=runs,
+        run_offset=run_offset,
+        backend="reference",
+        **options,
+    )
+    fast = simulate(
+        scenario, policy, seed=seed, runs=runs, run_offset=run_offset, backend="fast", **options
+    )
+    assert_same(reference, fast)
+    return fast

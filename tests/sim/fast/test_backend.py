@@ -1,0 +1,124 @@
+"""Choosing the backend, threads, scenes, buffers: the compiled backend's surface."""
+
+from __future__ import annotations
+
+from dataclasses import fields, replace
+
+import numpy as np
+import pytest
+
+import swarmtag.sim.fast._runner as fast_runner
+import swarmtag.sim.runner as sim_runner
+from swarmtag.errors import ConfigError
+from swarmtag.policy import Proximity, Urgency
+from swarmtag.sim import Realism, Scenario, WorldState, make_params, run_csv, simulate
+from swarmtag.sim.docking import STUCK_PROGRESS
+from swarmtag.sim.fast import _docking, _scene
+from swarmtag.sim.fast._layout import EVENT_SLOTS, World, constants_of
+from swarmtag.sim.runner import resolve_backend, seeded_state
+from swarmtag.sim.scene import _ATTEMPTS, _RESTARTS
+from tests.sim.fast.helpers import assert_same
+
+SCENARIO = replace(Scenario.default(3, 7), ticks=600)
+
+
+def test_layout_mirrors_the_world_state():
+    arrays = [f.name for f in fields(WorldState) if f.name != "tick"]
+    assert [name for name in World._fields if name != "run_tick"] == arrays
+    params = make_params(SCENARIO, Urgency(alpha=0.7))
+    constants = constants_of(params)
+    for name in constants._fields:
+        if hasattr(params, name):
+            assert getattr(constants, name) == getattr(params, name), name
+    assert (constants.policy_kind, constants.policy_parameter) == (1, 0.7)
+
+
+def test_constants_copied_from_the_reference_agree():
+    assert _docking.STUCK_PROGRESS == STUCK_PROGRESS
+    assert (_scene._ATTEMPTS, _scene._RESTARTS) == (_ATTEMPTS, _RESTARTS)
+
+
+def test_default_backend_is_fast_where_numba_is_installed(monkeypatch):
+    assert resolve_backend(None) == "fast"
+    assert resolve_backend(None, controller="bt") == "reference"
+    monkeypatch.setattr(sim_runner, "fast_available", lambda: False)
+    assert resolve_backend(None) == "reference"
+    with pytest.raises(ConfigError, match=r"backend: 'fast' needs numba .*swarmtag\[fast\]"):
+        simulate(SCENARIO, Proximity(), seed=0, runs=1, backend="fast")
+
+
+def test_bad_backends_are_refused():
+    with pytest.raises(ConfigError, match="backend"):
+        simulate(SCENARIO, Proximity(), seed=0, runs=1, backend="gpu")
+    with pytest.raises(ConfigError, match="runs the built-in controller only"):
+        simulate(SCENARIO, Proximity(), seed=0, runs=1, backend="fast", controller="bt")
+    with pytest.raises(ConfigError, match="threads"):
+        simulate(SCENARIO, Proximity(), seed=0, runs=1, backend="fast", threads=0)
+
+
+def test_threads_change_nothing():
+    one = simulate(SCENARIO, Urgency(alpha=9.0), seed=4, runs=9, backend="fast", threads=1)
+    three = simulate(SCENARIO, Urgency(alpha=9.0), seed=4, runs=9, backend="fast", threads=3)
+    assert_same(one, three)
+
+
+def test_a_run_is_the_same_alone_and_in_a_batch():
+    batch = simulate(SCENARIO, Urgency(alpha=0.7), seed=6, runs=5, backend="fast")
+    alone = simulate(SCENARIO, Urgency(alpha=0.7), seed=6, runs=1, run_offset=3, backend="fast")
+    assert run_csv(batch, 3) == run_csv(alone, 3)
+
+
+def test_full_event_buffers_pause_runs_without_changing_them(monkeypatch):
+    busy = replace(SCENARIO, ticks=3000, realism=Realism(breakdown=0.0005))
+    whole = simulate(busy, Urgency(alpha=0.7), seed=1, runs=3, backend="fast")
+    # room for one tick's events only: a run pauses after every tick that had events
+    monkeypatch.setattr(fast_runner, "_capacity", lambda robots: EVENT_SLOTS * robots)
+    paused = simulate(busy, Urgency(alpha=0.7), seed=1, runs=3, backend="fast")
+    assert_same(whole, paused)
+    for run in range(3):  # events in many ticks: every run paused again and again
+        assert len(set(paused.events.time[paused.events.run == run].tolist())) > 5
+
+
+@pytest.mark.parametrize(
+    "scenario",
+    [
+        Scenario.default(3, 7),
+        Scenario.default(20, 40),
+        replace(Scenario.default(9, 12, profile="lab"), realism=Realism(speed_variation=0.3)),
+        Scenario.default(40, 256),
+    ],
+    ids=["3x7", "20x40", "lab-speeds", "40x256"],
+)
+def test_compiled_scenes_are_the_reference_scenes(scenario):
+    params = make_params(scenario, Proximity())
+    reference = seeded_state(params, seed=7, runs=4, run_offset=11)
+    fast = seeded_state(params, seed=7, runs=4, run_offset=11, backend="fast")
+    for field in fields(WorldState):
+        ours = getattr(reference, field.name)
+        if isinstance(ours, np.ndarray):
+            assert np.array_equal(ours, getattr(fast, field.name), equal_nan=True), field.name
+
+
+def test_crowded_scenes_are_refused_alike():
+    crowded = Scenario.from_mapping({"robots": 30, "carriers": 7})  # fits a grid, not at random
+    params = make_params(crowded, Proximity())
+    with pytest.raises(ConfigError) as reference:
+        seeded_state(params, seed=0, runs=1)
+    with pytest.raises(ConfigError) as fast:
+        seeded_state(params, seed=0, runs=1, backend="fast")
+    assert str(reference.value) == str(fast.value)
+
+
+def test_large_scenes_place_every_robot_apart():
+    scenario = Scenario.from_mapping(
+        {
+            "robots": 1500,
+            "carriers": 20,
+            "arena": {"size": 40.0, "pickup_width": 8.0, "dropoff_width": 16.0},
+        }
+    )
+    state = seeded_state(make_params(scenario, Proximity()), seed=3, runs=1, backend="fast")
+    pos = state.robot_pos[0]
+    gaps = np.sqrt(((pos[:, None, :] - pos[None, :, :]) ** 2).sum(axis=-1))
+    np.fill_diagonal(gaps, np.inf)
+    assert gaps.min() >= 0.25

@@ -1,0 +1,153 @@
+"""The compiled backend gives the reference's event logs and final states, byte for byte.
+
+Every mechanic is switched on somewhere below: both perception models, every
+occlusion setting, sighting memory, both urgency models, every realism
+option, re-prioritisations (also several in one tick), the correlated walk,
+with and without taken-face avoidance, small and larger swarms, all three
+policies. Each case runs a few runs of one seed; the property test draws
+scenarios at random.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from swarmtag.policy import Proximity, Urgency, Weighted
+from swarmtag.sim import (
+    Camera,
+    Motion,
+    Radio,
+    Realism,
+    Reprioritisation,
+    Scenario,
+    Timing,
+    UrgencyModel,
+    Walk,
+)
+from tests.sim.fast.helpers import compare
+
+POLICIES = [Proximity(), Urgency(alpha=0.7), Urgency(alpha=9.0), Weighted(w=0.3)]
+
+PAPER = replace(Scenario.default(3, 7), ticks=1500)
+LAB = Scenario.default(3, 7, profile="lab")
+BASE = replace(Scenario.default(3, 7, profile="base"), ticks=1200)
+
+CASES = {
+    "paper-sim": PAPER,
+    "paper-sim-5x10": replace(Scenario.default(5, 10), ticks=800),
+    "lab-static": replace(LAB, urgency=UrgencyModel(model="static", static_time_limit=2500)),
+    "base-disc": BASE,
+    "realism": replace(
+        PAPER,
+        ticks=900,
+        realism=Realism(
+            advertisement_loss=0.2,
+            status_delay=3,
+            detection_noise=0.03,
+            speed_variation=0.2,
+            breakdown=0.0005,
+        ),
+    ),
+    "disc-realism": replace(
+        BASE, realism=Realism(advertisement_loss=0.3, detection_noise=0.05, breakdown=0.001)
+    ),
+    "memory-robots-occlude": replace(
+        PAPER, camera=Camera(range=2.0, occlusion="carriers+robots", memory=4.0)
+    ),
+    "robots-occlude": replace(PAPER, camera=Camera(range=3.6, occlusion="carriers+robots")),
+    "no-occlusion-short-camera": replace(PAPER, camera=Camera(range=1.2, occlusion="none")),
+    "slow-radio": replace(PAPER, radio=Radio(range=3.0, interval=0.7)),
+    "turning-walk": replace(PAPER, walk=Walk(turn_interval=0.4, turn_angle=75.0)),
+    "reprioritised": replace(
+        PAPER,
+        reprioritisations=(
+            Reprioritisation(tick=60, carrier=2, urgency=9),
+            Reprioritisation(tick=60, carrier=3, urgency=0),
+            Reprioritisation(tick=60, carrier=3, urgency=4),
+            Reprioritisation(tick=700, carrier=1, urgency=5),
+        ),
+    ),
+    "herding-no-avoidance": replace(
+        BASE,
+        detection_radius=3.6,
+        motion=replace(BASE.motion, avoid_taken_faces=False),
+    ),
+    "quick-handling": replace(
+        PAPER, timing=Timing(dock=0.0, lift=0.0, release=0.0, pursuit_timeout=2.0, cooldown=1.0)
+    ),
+    "crowded-20x40": replace(Scenario.default(20, 40), ticks=400),
+}
+
+
+@pytest.mark.parametrize("policy", POLICIES, ids=lambda p: p.name)
+@pytest.mark.parametrize("case", list(CASES))
+def test_backends_agree(case, policy):
+    compare(CASES[case], policy, seed=11, runs=4, run_offset=3)
+
+
+def test_hundreds_of_runs_agree():
+    # the published set-up: 200 runs at full length, the urgency policy most sensitive to order
+    result = compare(
+        replace(Scenario.default(3, 7), ticks=3000), Urgency(alpha=9.0), seed=5, runs=200
+    )
+    assert result.delivered.sum() > 0
+
+
+def test_recorded_and_checked_runs_agree():
+    reference = compare(PAPER, Urgency(alpha=3.0), seed=2, runs=2, record=True, check=True)
+    assert reference.trajectories is not None
+
+
+motions = st.builds(
+    Motion,
+    speed=st.sampled_from([0.2, 0.5, 1.0]),
+    turn_rate=st.sampled_from([45.0, 90.0, 400.0]),
+    arrival_tolerance=st.sampled_from([0.005, 0.01, 0.03]),
+    collision_iterations=st.integers(1, 8),
+    avoid_taken_faces=st.booleans(),
+)
+cameras = st.builds(
+    Camera,
+    range=st.sampled_from([0.8, 1.5, 3.6]),
+    occlusion=st.sampled_from(["none", "carriers", "carriers+robots"]),
+    memory=st.sampled_from([0.0, 0.0, 1.0, 6.0]),
+)
+realisms = st.builds(
+    Realism,
+    advertisement_loss=st.sampled_from([0.0, 0.25]),
+    status_delay=st.integers(0, 4),
+    detection_noise=st.sampled_from([0.0, 0.02]),
+    speed_variation=st.sampled_from([0.0, 0.3]),
+    breakdown=st.sampled_from([0.0, 0.002]),
+)
+
+
+@st.composite
+def scenarios(draw: st.DrawFn) -> Scenario:
+    """A short scenario with every setting drawn at random."""
+    tick = draw(st.sampled_from([0.02, 0.1, 0.25]))
+    motion = draw(motions.filter(lambda m: m.speed * tick <= 0.125))  # at most a radius a tick
+    base = Scenario.default(draw(st.integers(1, 8)), draw(st.integers(1, 12)), profile="base")
+    model = draw(st.sampled_from(["growing", "static"]))
+    return replace(
+        base,
+        ticks=300,
+        tick=tick,
+        perception=draw(st.sampled_from(["disc", "split"])),
+        detection_radius=1.5,
+        motion=motion,
+        camera=draw(cameras),
+        realism=draw(realisms),
+        walk=draw(st.sampled_from([Walk(), Walk(turn_interval=0.3, turn_angle=90.0)])),
+        urgency=UrgencyModel(model=model, static_time_limit=300),
+    )
+
+
+@settings(max_examples=40)
+@given(scenario=scenarios(), policy=st.sampled_from(POLICIES), seed=st.integers(0, 2**32))
+def test_random_scenarios_agree(scenario, policy, seed):
+    compare(scenario, policy, seed=seed, runs=2)
