@@ -114,6 +114,11 @@ class TickEvents:
         return total
 
 
+_LABELS = np.array([""] + [kind.label for kind in EventKind], dtype=str)
+"""The ``kind`` column's text, indexed by ``EventKind`` value."""
+assert [int(kind) for kind in EventKind] == list(range(1, len(EventKind) + 1))
+
+
 class EventRecorder:
     """Accumulates event rows tick by tick and builds the ``EventTable`` at the end."""
 
@@ -191,7 +196,7 @@ class EventRecorder:
             values = np.zeros(0)
         global_runs = run_ids[runs]
         order = np.lexsort((carriers, robots, kinds, ticks, global_runs))
-        labels = np.array([EventKind(k).label for k in kinds[order].tolist()], dtype=str)
+        labels = _LABELS[kinds[order]]
         return EventTable(
             condition=np.full(order.shape, condition),
             seed=np.full(order.shape, seed, dtype=np.int64),

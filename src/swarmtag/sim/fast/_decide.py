@@ -179,7 +179,9 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
 
 
 @jit
-def _directions(r: int, n: int, turn: np.ndarray, w: World, k: Constants, x: Scratch) -> None:
+def _directions(
+    r: int, n: int, turns: np.ndarray, row: int, w: World, k: Constants, x: Scratch
+) -> None:
     """Fresh walk directions, the correlated walk's turn, sidesteps (end of ``decide``)."""
     push_x = w.contact[r, n, 0]
     push_y = w.contact[r, n, 1]
@@ -196,8 +198,8 @@ def _directions(r: int, n: int, turn: np.ndarray, w: World, k: Constants, x: Scr
             if w.walk_clock[r, n] >= k.walk_turn_ticks:
                 hx = w.walk[r, n, 0]
                 hy = w.walk[r, n, 1]
-                c = turn[n, 0]
-                s = turn[n, 1]
+                c = turns[r, row, n, 0]
+                s = turns[r, row, n, 1]
                 rx = hx * c - hy * s
                 ry = hx * s + hy * c
                 length = math.sqrt(rx * rx + ry * ry)
@@ -216,15 +218,23 @@ def _directions(r: int, n: int, turn: np.ndarray, w: World, k: Constants, x: Scr
 
 @jit
 def decide_robots(
-    r: int, t: int, lo: int, hi: int, turn: np.ndarray, w: World, k: Constants, x: Scratch
+    r: int,
+    t: int,
+    lo: int,
+    hi: int,
+    turns: np.ndarray,
+    row: int,
+    w: World,
+    k: Constants,
+    x: Scratch,
 ) -> None:
     """The ``decide`` step of tick ``t`` for robots ``lo .. hi - 1`` of run ``r``.
 
-    ``turn`` (robots, 2) is this tick's walk turn of each robot as ``(cos, sin)``.
+    ``turns[r, row]`` (robots, 2) is this tick's walk turn of each robot as ``(cos, sin)``.
     """
     for n in range(lo, hi):
         _pursuit_check(r, n, t, w, k, x)
         _switch_taken_face(r, n, w, k)
         if x.before_mode[r, n] == _WALK and w.mode[r, n] == _WALK:
             _select(r, n, t, w, k, x)
-        _directions(r, n, turn, w, k, x)
+        _directions(r, n, turns, row, w, k, x)

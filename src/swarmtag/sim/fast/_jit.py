@@ -23,7 +23,7 @@ from typing import Any, TypeVar
 
 import numba
 
-__all__ = ["counted", "jit"]
+__all__ = ["counted", "inlined", "jit"]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -38,6 +38,14 @@ def jit(function: _F) -> _F:
     compiled: _F = _njit(cache=True, fastmath=False, error_model="numpy", nogil=True, _nrt=False)(
         function
     )
+    return compiled
+
+
+def inlined(function: _F) -> _F:
+    """Like ``jit``, inlined into its callers by numba (small helpers called per pair)."""
+    compiled: _F = _njit(
+        cache=True, fastmath=False, error_model="numpy", nogil=True, _nrt=False, inline="always"
+    )(function)
     return compiled
 
 

@@ -22,6 +22,7 @@ from swarmtag.sim.state import WorldState
 
 __all__ = [
     "EVENT_SLOTS",
+    "GRID_FROM",
     "Constants",
     "Scratch",
     "World",
@@ -37,6 +38,8 @@ I8 = NDArray[np.int64]
 B1 = NDArray[np.bool_]
 S1 = NDArray[np.int8]
 
+GRID_FROM: Final = 96
+"""Bodies of a kind beyond which the kernel finds neighbours with a grid instead of a scan."""
 EVENT_SLOTS: Final = 8
 """Robot event kinds (``EventKind`` 1-8); a robot has at most one of each per tick."""
 
@@ -130,6 +133,14 @@ class Constants(NamedTuple):
     breakdown: float
     policy_kind: int
     policy_parameter: float
+    grid_cell: float
+    """Side of a grid cell: the longest reach of a collision (two loaded robots, ...)."""
+    grid_size: int
+    """Cells along each side of the (square) arena's grid."""
+    obstacle_grid: bool
+    """Find each robot's obstacle carriers with the grid (many carriers) rather than a scan."""
+    robot_grid: bool
+    """Find each robot's neighbours with the grid (many robots) rather than a scan."""
 
 
 class Scratch(NamedTuple):
@@ -144,6 +155,8 @@ class Scratch(NamedTuple):
     noise: F8
     known: B1
     measured: F8
+    blocker: I8
+    """(R, N, C) the carrier that last hid each carrier from each robot (tried first), -1 none."""
     proposed: F8
     x: F8
     y: F8
@@ -161,6 +174,26 @@ class Scratch(NamedTuple):
     lower: I8
     carrier_mark: I8
     advertises: B1
+    advertising: I8
+    """(R, C) this tick's advertising tags that are in the arena, ``advertising_count`` of them."""
+    advertising_count: I8
+    obstacles: I8
+    """(R, C) this tick's obstacle carriers (in the arena, not carried), in index order."""
+    obstacle_count: I8
+    obstacle_x: F8
+    """(R, C) the obstacles' x, in ``obstacles`` order."""
+    obstacle_y: F8
+    obstacle_start: I8
+    """(R, cells + 1) the obstacles' grid (``_grid``): where each cell's list starts."""
+    obstacle_items: I8
+    """(R, C) the obstacles' grid: positions in ``obstacles``, cell by cell."""
+    robot_start: I8
+    """(R, cells + 1) the robots' grid of a collision pass (large swarms)."""
+    robot_items: I8
+    """(R, N) the robots' grid: robot ids, cell by cell."""
+    gathered: I8
+    """(R, max(N, C)) bodies a grid query found, ascending."""
+
     slot_on: B1
     slot_carrier: I8
     slot_value: F8
@@ -183,6 +216,8 @@ def policy_code(params: Params) -> tuple[int, float]:
 def constants_of(params: Params) -> Constants:
     """The kernel's constants for ``params``."""
     kind, parameter = policy_code(params)
+    half, radius = params.carrier_half, params.robot_radius
+    cell = max(2 * half, half + radius, 2 * radius)
     return Constants(
         robots=params.robots,
         carriers=params.carriers,
@@ -222,6 +257,10 @@ def constants_of(params: Params) -> Constants:
         breakdown=params.breakdown,
         policy_kind=kind,
         policy_parameter=parameter,
+        grid_cell=cell,
+        grid_size=int(params.arena / cell) + 1,
+        obstacle_grid=params.carriers > GRID_FROM,
+        robot_grid=params.robots > GRID_FROM,
     )
 
 
@@ -239,8 +278,8 @@ def state_of(world: World, template: WorldState) -> WorldState:
     return replace(template, tick=tick, **arrays)
 
 
-def scratch_for(runs: int, robots: int, carriers: int, capacity: int) -> Scratch:
-    """Working space for ``runs`` runs and event buffers of ``capacity`` rows per run."""
+def scratch_for(runs: int, robots: int, carriers: int, capacity: int, cells: int) -> Scratch:
+    """Working space for ``runs`` runs, event buffers of ``capacity`` rows, grids of ``cells``."""
     n, c = (runs, robots), (runs, carriers)
     nc = (runs, robots, carriers)
 
@@ -257,6 +296,7 @@ def scratch_for(runs: int, robots: int, carriers: int, capacity: int) -> Scratch
         noise=floats(*nc, 2),
         known=np.zeros(nc, dtype=bool),
         measured=floats(*nc),
+        blocker=np.full(nc, -1, dtype=np.int64),
         proposed=floats(*n, 2),
         x=floats(*n),
         y=floats(*n),
@@ -274,6 +314,17 @@ def scratch_for(runs: int, robots: int, carriers: int, capacity: int) -> Scratch
         lower=np.full(n, -1, dtype=np.int64),
         carrier_mark=np.full(c, -1, dtype=np.int64),
         advertises=np.zeros(c, dtype=bool),
+        advertising=np.zeros(c, dtype=np.int64),
+        advertising_count=np.zeros(runs, dtype=np.int64),
+        obstacles=np.zeros(c, dtype=np.int64),
+        obstacle_count=np.zeros(runs, dtype=np.int64),
+        obstacle_x=floats(*c),
+        obstacle_y=floats(*c),
+        obstacle_start=np.zeros((runs, cells + 1), dtype=np.int64),
+        obstacle_items=np.zeros(c, dtype=np.int64),
+        robot_start=np.zeros((runs, cells + 1), dtype=np.int64),
+        robot_items=np.zeros(n, dtype=np.int64),
+        gathered=np.zeros((runs, max(robots, carriers)), dtype=np.int64),
         slot_on=np.zeros((*n, EVENT_SLOTS), dtype=bool),
         slot_carrier=np.zeros((*n, EVENT_SLOTS), dtype=np.int64),
         slot_value=np.zeros((*n, EVENT_SLOTS)),

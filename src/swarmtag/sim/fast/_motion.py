@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from swarmtag.sim.fast._geometry import (
     FACE_X,
     FACE_Y,
@@ -22,6 +24,7 @@ from swarmtag.sim.fast._geometry import (
     step_towards,
     turn_towards,
 )
+from swarmtag.sim.fast._grid import fill, near
 from swarmtag.sim.fast._jit import jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
@@ -90,7 +93,28 @@ def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
 
 @jit
 def _bodies(r: int, w: World, k: Constants, x: Scratch) -> None:
-    """Each robot's rounded box and whether it can be pushed (``motion._bodies``)."""
+    """Each robot's rounded box, whether it can be pushed, the obstacles (``motion._bodies``)."""
+    count = 0
+    for c in range(k.carriers):
+        if w.present[r, c] and w.carried_by[r, c] < 0:
+            x.obstacles[r, count] = c
+            x.obstacle_x[r, count] = w.carrier_pos[r, c, 0]
+            x.obstacle_y[r, count] = w.carrier_pos[r, c, 1]
+            count += 1
+    x.obstacle_count[r] = count
+    if k.obstacle_grid:
+        size = k.grid_size
+        fill(
+            r,
+            x.obstacle_x,
+            x.obstacle_y,
+            count,
+            k.grid_cell,
+            size,
+            size,
+            x.obstacle_start,
+            x.obstacle_items,
+        )
     for n in range(k.robots):
         mode = w.mode[r, n]
         loaded = (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and w.target[r, n] >= 0
@@ -100,47 +124,115 @@ def _bodies(r: int, w: World, k: Constants, x: Scratch) -> None:
 
 
 @jit
+def _robot_sums(
+    r: int, n: int, xn: float, yn: float, ids: np.ndarray, count: int, listed: bool, x: Scratch
+) -> tuple[float, float]:
+    """The summed pushes of other robots on movable robot ``n``.
+
+    The robots are ``ids[r, :count]`` (ascending) when ``listed``, else ``0 .. count - 1``.
+    """
+    extent = x.extent[r, n]
+    radius = x.radius[r, n]
+    total_x = 0.0
+    total_y = 0.0
+    for j in range(count):
+        m = ids[r, j] if listed else j
+        if m == n:
+            continue
+        pair_extent = extent + x.extent[r, m]
+        pair_radius = radius + x.radius[r, m]
+        reach = pair_extent + pair_radius
+        dx = xn - x.x[r, m]
+        dy = yn - x.y[r, m]
+        if abs(dx) < reach and abs(dy) < reach:
+            share = 0.5 if x.movable[r, m] else 1.0
+            push_x, push_y, _ = contact(dx, dy, pair_extent, pair_radius, -1.0 if n < m else 1.0)
+            total_x += push_x * share
+            total_y += push_y * share
+    return total_x, total_y
+
+
+@jit
+def _obstacle_sums(
+    r: int,
+    n: int,
+    xn: float,
+    yn: float,
+    ids: np.ndarray,
+    count: int,
+    listed: bool,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> tuple[float, float]:
+    """The summed pushes of obstacle carriers on movable robot ``n``.
+
+    The obstacles are ``ids[r, :count]`` (ascending) when ``listed``, else ``0 .. count - 1``.
+    """
+    extent = x.extent[r, n] + k.carrier_half
+    radius = x.radius[r, n]
+    reach = extent + radius
+    ghost = w.ghost[r, n]
+    total_x = 0.0
+    total_y = 0.0
+    for j in range(count):
+        i = ids[r, j] if listed else j
+        dx = xn - x.obstacle_x[r, i]
+        dy = yn - x.obstacle_y[r, i]
+        if abs(dx) < reach and abs(dy) < reach and x.obstacles[r, i] != ghost:
+            push_x, push_y, _ = contact(dx, dy, extent, radius, 1.0)
+            total_x += push_x
+            total_y += push_y
+    return total_x, total_y
+
+
+@jit
 def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
     """One Jacobi pass from ``x.x, x.y`` into ``x.new_x, x.new_y``; whether anyone moved."""
     moved = False
     half = k.carrier_half
+    size = k.grid_size
+    cell = k.grid_cell
+    if k.robot_grid:
+        fill(r, x.x, x.y, k.robots, cell, size, size, x.robot_start, x.robot_items)
     for n in range(k.robots):
         xn = x.x[r, n]
         yn = x.y[r, n]
         extent = x.extent[r, n]
         radius = x.radius[r, n]
-        movable = x.movable[r, n]
         robot_x = 0.0
         robot_y = 0.0
         carrier_x = 0.0
         carrier_y = 0.0
-        if movable:
-            for m in range(k.robots):
-                if m == n:
-                    continue
-                share = 0.5 if x.movable[r, m] else 1.0
-                pair_extent = extent + x.extent[r, m]
-                pair_radius = radius + x.radius[r, m]
-                reach = pair_extent + pair_radius
-                dx = xn - x.x[r, m]
-                dy = yn - x.y[r, m]
-                if abs(dx) < reach and abs(dy) < reach:
-                    push_x, push_y, _ = contact(
-                        dx, dy, pair_extent, pair_radius, -1.0 if n < m else 1.0
-                    )
-                    robot_x += push_x * share
-                    robot_y += push_y * share
-            ghost = w.ghost[r, n]
+        if x.movable[r, n]:
+            if k.robot_grid:
+                count = near(
+                    r, xn, yn, cell, cell, size, size, x.robot_start, x.robot_items, x.gathered
+                )
+                robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, count, True, x)
+            else:
+                robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, k.robots, False, x)
             reach = (extent + half) + radius
-            for c in range(k.carriers):
-                if c == ghost or not w.present[r, c] or w.carried_by[r, c] >= 0:
-                    continue
-                dx = xn - w.carrier_pos[r, c, 0]
-                dy = yn - w.carrier_pos[r, c, 1]
-                if abs(dx) < reach and abs(dy) < reach:
-                    push_x, push_y, _ = contact(dx, dy, extent + half, radius, 1.0)
-                    carrier_x += push_x
-                    carrier_y += push_y
+            if k.obstacle_grid:
+                count = near(
+                    r,
+                    xn,
+                    yn,
+                    reach,
+                    cell,
+                    size,
+                    size,
+                    x.obstacle_start,
+                    x.obstacle_items,
+                    x.gathered,
+                )
+                carrier_x, carrier_y = _obstacle_sums(
+                    r, n, xn, yn, x.gathered, count, True, w, k, x
+                )
+            else:
+                carrier_x, carrier_y = _obstacle_sums(
+                    r, n, xn, yn, x.gathered, x.obstacle_count[r], False, w, k, x
+                )
         margin = extent + radius
         high = k.arena - margin
         new_x = minimum(maximum((xn + robot_x) + carrier_x, margin), high)

@@ -69,21 +69,20 @@ def default_threads() -> int:
 
 
 class _Streams:
-    """Each run's generators of the kernel's streams (a dummy where a stream is off)."""
+    """Each run's generators of the kernel's streams."""
 
     def __init__(self, params: Params, seed: int, run_ids: list[int]) -> None:
-        dummy = np.random.default_rng(0)
-
-        def generators(purpose: Stream, active: bool) -> Sequence[np.random.Generator]:
+        def generators(purpose: Stream) -> Sequence[np.random.Generator]:
             listed: Sequence[np.random.Generator] = List(
-                [stream(seed, run, purpose) if active else dummy for run in run_ids]
+                [stream(seed, run, purpose) for run in run_ids]
             )
             return listed
 
-        self.motion = generators(Stream.MOTION, True)
-        self.breakdown = generators(Stream.BREAKDOWN, params.breakdown > 0)
-        self.radio = generators(Stream.RADIO, params.advertisement_loss > 0)
-        self.camera = generators(Stream.CAMERA, params.detection_noise > 0)
+        # a stream that is off is never drawn from: the motion list stands in for it
+        self.motion = generators(Stream.MOTION)
+        self.breakdown = generators(Stream.BREAKDOWN) if params.breakdown > 0 else self.motion
+        self.radio = generators(Stream.RADIO) if params.advertisement_loss > 0 else self.motion
+        self.camera = generators(Stream.CAMERA) if params.detection_noise > 0 else self.motion
         self._walk = (
             [stream(seed, run, Stream.WALK) for run in run_ids]
             if params.walk_turn_ticks > 0
@@ -167,13 +166,18 @@ class _Batch:
         self.params = params
         self.world = world_of(state)
         self.constants = constants_of(params)
-        self.scratch = scratch_for(runs, robots, params.carriers, capacity=_capacity(robots))
+        k = self.constants
+        cells = k.grid_size**2 if k.obstacle_grid or k.robot_grid else 1
+        self.scratch = scratch_for(
+            runs, robots, params.carriers, capacity=_capacity(robots), cells=cells
+        )
         self.streams = _Streams(params, seed, [int(run) for run in state.run_ids])
         self.events = EventRecorder()
         self.breakdowns = np.zeros(runs, dtype=np.int64)
         threads = max(1, min(threads, runs))
         count = min(runs, threads * _GROUPS_PER_THREAD) if threads > 1 else 1
-        self.groups = [np.arange(g, runs, count, dtype=np.int64) for g in range(count)]
+        # contiguous blocks of runs: a thread's runs share cache lines with few of another's
+        self.groups = [block.astype(np.int64) for block in np.array_split(np.arange(runs), count)]
         self.pool = ThreadPoolExecutor(threads) if threads > 1 else None
 
     def close(self) -> None:

@@ -97,7 +97,8 @@ def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
 def tick_run(
     r: int,
     t: int,
-    turn: np.ndarray,
+    turns: np.ndarray,
+    row: int,
     motion: np.random.Generator,
     breakdown: np.random.Generator,
     radio: np.random.Generator,
@@ -106,7 +107,10 @@ def tick_run(
     k: Constants,
     x: Scratch,
 ) -> None:
-    """Tick ``t`` of run ``r``: every phase of ``kernel.step`` but the operator writes."""
+    """Tick ``t`` of run ``r``: every phase of ``kernel.step`` but the operator writes.
+
+    ``turns[r, row]`` are the tick's walk turns (when the walk turns).
+    """
     robots = k.robots
     _draw(r, motion, breakdown, radio, camera, k, x)
     for n in range(robots):
@@ -117,7 +121,7 @@ def tick_run(
         tags_advertising(r, t, w, k, x)
     sense_robots(r, t, 0, robots, w, k, x)
     break_down_robots(r, 0, robots, w, k, x)
-    decide_robots(r, t, 0, robots, turn, w, k, x)
+    decide_robots(r, t, 0, robots, turns, row, w, k, x)
     move_robots(r, 0, robots, w, k, x)
     resolve_run(r, w, k, x)
     arrive_run(r, 4 * t, w, k, x)
@@ -127,6 +131,30 @@ def tick_run(
     deliver_run(r, t, lifted, w, k, x)
     _end_of_tick(r, t, w, k)
     flush_slots(r, t, robots, x)
+
+
+@jit
+def _run_to(
+    r: int,
+    until: int,
+    turns: np.ndarray,
+    turns_from: int,
+    motion: np.random.Generator,
+    breakdown: np.random.Generator,
+    radio: np.random.Generator,
+    camera: np.random.Generator,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """Run ``r`` tick by tick to ``until``, its end, or a full event buffer."""
+    while w.ended_at[r] < 0 and w.run_tick[r] < until and x.failure[r] == 0:
+        if not room_for_tick(r, k.robots, x):
+            return
+        t = w.run_tick[r] + 1
+        row = t - turns_from if k.walk_turn_ticks > 0 else 0
+        tick_run(r, t, turns, row, motion, breakdown, radio, camera, w, k, x)
+        w.run_tick[r] = t
 
 
 @counted
@@ -147,14 +175,9 @@ def advance(
 
     ``turns[r, t - turns_from]`` holds run ``r``'s walk turns of tick ``t``
     (``(cos, sin)`` per robot) when the walk turns; ``motion`` ... ``camera``
-    are typed lists of each run's generators.
+    are typed lists of each run's generators. Only this entry point counts
+    references (typed lists); each run's ticks run in ``_run_to``, which does not.
     """
     for i in range(rows.shape[0]):
         r = rows[i]
-        while w.ended_at[r] < 0 and w.run_tick[r] < until and x.failure[r] == 0:
-            if not room_for_tick(r, k.robots, x):
-                break
-            t = w.run_tick[r] + 1
-            turn = turns[r, t - turns_from] if k.walk_turn_ticks > 0 else turns[r, 0]
-            tick_run(r, t, turn, motion[r], breakdown[r], radio[r], camera[r], w, k, x)
-            w.run_tick[r] = t
+        _run_to(r, until, turns, turns_from, motion[r], breakdown[r], radio[r], camera[r], w, k, x)
