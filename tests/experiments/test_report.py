@@ -118,3 +118,25 @@ def test_study_report_of_a_folder_without_results_is_one_line(tmp_path, capsys):
     assert out == ""
     assert err.count("\n") == 1
     assert "no results of a shipped study here" in err
+
+
+def test_a_report_reuses_the_summaries_run_study_computed(tmp_path, monkeypatch):
+    study = load_study(write_study(tmp_path))
+    out = tmp_path / "out"
+    result = run_study(study, out_dir=out, workers=1)
+    write_report(out, [study])
+    folder = out / study.name / "default"
+    tables = (folder / "tables.md").read_text()
+    latex = (folder / "tables.tex").read_text()
+
+    def no_bootstrap(*args, **kwargs):
+        raise AssertionError("the summary was computed again")
+
+    monkeypatch.setattr("swarmtag.experiments.report.summarize", no_bootstrap)
+    write_report(out, [study], computed=[result])
+    assert (folder / "tables.md").read_text() == tables
+    assert (folder / "tables.tex").read_text() == latex
+    # a result of other runs or resamples is not taken for this one
+    other = run_study(study, out_dir=tmp_path / "quick", workers=1, quick=True)
+    with pytest.raises(AssertionError, match="computed again"):
+        write_report(out, [study], computed=[other])

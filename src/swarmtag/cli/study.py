@@ -185,6 +185,7 @@ def reproduce(
     studies = _studies(sources, None)
     show = sys.stderr.isatty() if progress is None else progress
     started = time.perf_counter()
+    results = []
     for spec in studies:
         begin = time.perf_counter()
         result = run_study(
@@ -197,6 +198,7 @@ def reproduce(
             backend=backend,
         )
         wall = time.perf_counter() - begin
+        results.append(result)
         record = StudyRecord(
             wall_time_s=wall,
             quick=quick,
@@ -208,5 +210,5 @@ def reproduce(
             f"{spec.name}: {result.computed_runs} runs computed, {result.reused_runs} reused, "
             f"{wall:.1f} s"
         )
-    path = write_report(out_dir, studies)
+    path = write_report(out_dir, studies, computed=results)
     click.echo(f"report: {path} ({time.perf_counter() - started:.1f} s in all)")

@@ -37,7 +37,7 @@ from swarmtag.analysis.tables import (
     scalability_table,
 )
 from swarmtag.errors import StudyError
-from swarmtag.experiments.runner import QUICK_RESAMPLES, STORE_NAME, study_key
+from swarmtag.experiments.runner import QUICK_RESAMPLES, STORE_NAME, StudyResult, study_key
 from swarmtag.experiments.spec import Study
 from swarmtag.experiments.store import ResultsStore
 from swarmtag.io import CarrierLog
@@ -122,13 +122,20 @@ class _ScaleResult:
 
 
 def _scale_reports(
-    store: ResultsStore, study: Study, runs: int, resamples: int
+    store: ResultsStore,
+    study: Study,
+    runs: int,
+    resamples: int,
+    known: Mapping[str, MetricsReport],
 ) -> dict[str, _ScaleResult]:
+    """Each scale's summary (``known`` ones reused), carrier log and choice statistics."""
     reports = {}
     for scale in study.scales:
         key = study_key(study, scale.key)
         log = store.load_log(key, study.conditions, runs)
-        report = summarize(log, baseline=study.baseline, n_resamples=resamples, seed=study.seed)
+        report = known.get(scale.key) or summarize(
+            log, baseline=study.baseline, n_resamples=resamples, seed=study.seed
+        )
         choices = choice_statistics(
             store.load_events(key, study.conditions, runs),
             log=log,
@@ -166,9 +173,19 @@ def _facts(study: Study, runs: int, resamples: int, record: StudyRecord | None) 
 
 
 def _study_sections(
-    out_dir: Path, target_dir: Path, study: Study, *, resamples: int | None, export_format: str
+    out_dir: Path,
+    target_dir: Path,
+    study: Study,
+    *,
+    resamples: int | None,
+    export_format: str,
+    computed: Sequence[StudyResult],
 ) -> list[Section]:
-    """Read ``study``'s runs from ``out_dir``; write its logs, tables, figures in ``target_dir``."""
+    """Read ``study``'s runs from ``out_dir``; write its logs, tables, figures in ``target_dir``.
+
+    A summary in ``computed`` (``run_study``'s, this process) of the same
+    study, runs and resamples is used as it is rather than bootstrapped again.
+    """
     from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
 
     record = _read_record(out_dir, study)
@@ -177,7 +194,15 @@ def _study_sections(
         if resamples is None:
             quick = record is not None and record.quick
             resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
-        reports = _scale_reports(store, study, runs, resamples)
+        known = next(
+            (
+                result.reports
+                for result in computed
+                if (result.study, result.runs, result.resamples) == (study.name, runs, resamples)
+            ),
+            {},
+        )
+        reports = _scale_reports(store, study, runs, resamples, known)
         for part in study.scales:
             target = target_dir / study.name / part.key
             target.mkdir(parents=True, exist_ok=True)
@@ -230,12 +255,15 @@ def write_report(
     *,
     resamples: int | None = None,
     export_format: str = "csv",
+    computed: Sequence[StudyResult] = (),
 ) -> Path:
     """Event logs, tables, figures and ``report.html`` of ``studies`` from ``out_dir``'s store.
 
     ``resamples`` defaults to each study's own (capped for quick runs); the
     event logs of every scale are exported as ``carriers.<fmt>`` and
-    ``events.<fmt>`` (``export_format``: ``csv`` or ``parquet``).
+    ``events.<fmt>`` (``export_format``: ``csv`` or ``parquet``). ``computed``:
+    ``run_study`` results of this process whose summaries match are reused
+    (the same numbers, computed once).
     """
     folder = check_path(out_dir, what="DIR", error=StudyError)
     if not is_regular_file(folder / STORE_NAME):
@@ -248,7 +276,12 @@ def write_report(
         sections = []
         for study in studies:
             sections += _study_sections(
-                folder, staged, study, resamples=resamples, export_format=export_format
+                folder,
+                staged,
+                study,
+                resamples=resamples,
+                export_format=export_format,
+                computed=computed,
             )
         write_html(
             staged / REPORT_NAME,

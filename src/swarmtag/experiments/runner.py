@@ -22,7 +22,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
 from typing import Any, Final, Self
@@ -32,7 +32,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from swarmtag._atomic import atomic_write_bytes
 from swarmtag._inputs import check_path
 from swarmtag._resources import check_memory
-from swarmtag.analysis import summarize
+from swarmtag.analysis import MetricsReport, summarize
 from swarmtag.analysis.resampling import bootstrap_memory
 from swarmtag.errors import ConfigError, StudyError
 from swarmtag.experiments.chunks import ChunkJob, ChunkResult, split_runs
@@ -112,6 +112,12 @@ class StudyResult:
     metrics: dict[str, dict[str, Any]]
     computed_runs: int
     reused_runs: int
+    reports: dict[str, MetricsReport] = field(default_factory=dict, compare=False)
+    """The summaries behind ``metrics``, per scale (a report in the same process reuses them)."""
+    runs: int = 0
+    """Runs per condition the summaries cover."""
+    resamples: int = 0
+    """Bootstrap resamples of the summaries."""
 
 
 def _cost(job: ChunkJob) -> int:
@@ -220,6 +226,26 @@ def _execution(
     return resolved, workers if resolved == "fast" else 1
 
 
+def _summaries(
+    study: Study, store: ResultsStore, study_dir: Path, runs: int, resamples: int
+) -> tuple[dict[str, MetricsReport], dict[str, dict[str, Any]], dict[str, Path]]:
+    """Each scale's summary of ``runs`` stored runs, its JSON, and its ``metrics.json``."""
+    reports: dict[str, MetricsReport] = {}
+    metrics: dict[str, dict[str, Any]] = {}
+    paths: dict[str, Path] = {}
+    for scale in study.scales:
+        log = store.load_log(study_key(study, scale.key), study.conditions, runs)
+        report = summarize(log, baseline=study.baseline, n_resamples=resamples, seed=study.seed)
+        reports[scale.key] = report
+        metrics[scale.key] = report.to_json()
+        path = study_dir / scale.key / "metrics.json"
+        path.parent.mkdir(exist_ok=True)
+        text = json.dumps(metrics[scale.key], indent=2, allow_nan=False) + "\n"
+        atomic_write_bytes(path, text.encode())
+        paths[scale.key] = path
+    return reports, metrics, paths
+
+
 def run_study(
     study: Study,
     *,
@@ -297,20 +323,8 @@ def run_study(
                     run_local(jobs, 1, store_chunk)  # each chunk's runs on the threads
                 else:
                     run_local(jobs, workers or os.cpu_count() or 1, store_chunk)
-            metrics: dict[str, dict[str, Any]] = {}
-            paths: dict[str, Path] = {}
             resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
-            for scale in study.scales:
-                log = store.load_log(study_key(study, scale.key), study.conditions, runs)
-                report = summarize(
-                    log, baseline=study.baseline, n_resamples=resamples, seed=study.seed
-                )
-                metrics[scale.key] = report.to_json()
-                path = study_dir / scale.key / "metrics.json"
-                path.parent.mkdir(exist_ok=True)
-                text = json.dumps(metrics[scale.key], indent=2, allow_nan=False) + "\n"
-                atomic_write_bytes(path, text.encode())
-                paths[scale.key] = path
+            reports, metrics, paths = _summaries(study, store, study_dir, runs, resamples)
     return StudyResult(
         study=study.name,
         store=folder / STORE_NAME,
@@ -318,4 +332,7 @@ def run_study(
         metrics=metrics,
         computed_runs=todo,
         reused_runs=total - todo,
+        reports=reports,
+        runs=runs,
+        resamples=resamples,
     )
