@@ -16,7 +16,8 @@ import numpy as np
 from swarmtag.policy._kernel import kernel_score
 from swarmtag.sim.fast._events import emit
 from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, away_from, norm
-from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._grid import near
+from swarmtag.sim.fast._jit import inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
 __all__ = ["break_down_robots", "decide_robots"]
@@ -28,13 +29,13 @@ _BREAKDOWN, _ABANDON, _TIMEOUT, _SELECT, _CANDIDATES = 1, 2, 3, 4, 5
 _score = jit(kernel_score)
 
 
-@jit
+@inlined
 def _loaded(mode: int, target: int) -> bool:
     """``_index.is_loaded`` for one robot."""
     return (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and target >= 0
 
 
-@jit
+@inlined
 def _to_walk(r: int, n: int, w: World) -> None:
     """``_index.to_walk`` for one robot."""
     w.mode[r, n] = _WALK
@@ -44,7 +45,7 @@ def _to_walk(r: int, n: int, w: World) -> None:
     w.redirect[r, n] = True
 
 
-@jit
+@inlined
 def break_down_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
     """Robots whose breakdown number fired break down for good (``world.break_down``)."""
     if k.breakdown <= 0:
@@ -61,16 +62,38 @@ def break_down_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scrat
         w.mode[r, n] = _BROKEN
 
 
-@jit
-def _taken(r: int, n: int, cx: float, cy: float, face: int, w: World, k: Constants) -> bool:
-    """``predock.taken_faces`` for one robot, carrier centre and face."""
+@inlined
+def _taken(
+    r: int, n: int, cx: float, cy: float, face: int, w: World, k: Constants, x: Scratch
+) -> bool:
+    """``predock.taken_faces`` for one robot, carrier centre and face.
+
+    With a grid, only the robots in cells within a body of the point are tried.
+    """
     px = cx + FACE_X[face] * k.predock_offset
     py = cy + FACE_Y[face] * k.predock_offset
     rx = w.robot_pos[r, n, 0]
     ry = w.robot_pos[r, n, 1]
     mine = norm(rx - px, ry - py)
     body = 2 * k.robot_radius
-    for m in range(k.robots):
+    count = k.robots
+    if k.robot_grid:
+        size = k.grid_size
+        count = near(
+            r,
+            px,
+            py,
+            body,
+            k.grid_cell,
+            size,
+            size,
+            x.robot_start,
+            x.robot_items,
+            x.near_robots,
+            False,
+        )
+    for j in range(count):
+        m = x.near_robots[r, j] if k.robot_grid else j
         if m == n:
             continue
         mx = w.robot_pos[r, m, 0]
@@ -81,8 +104,10 @@ def _taken(r: int, n: int, cx: float, cy: float, face: int, w: World, k: Constan
     return False
 
 
-@jit
-def _nearest_face(r: int, n: int, c: int, avoid_taken: bool, w: World, k: Constants) -> int:
+@inlined
+def _nearest_face(
+    r: int, n: int, c: int, avoid_taken: bool, w: World, k: Constants, x: Scratch
+) -> int:
     """``predock.nearest_free_face`` over the carrier's free faces (minus taken ones)."""
     cx = w.carrier_pos[r, c, 0]
     cy = w.carrier_pos[r, c, 1]
@@ -93,7 +118,7 @@ def _nearest_face(r: int, n: int, c: int, avoid_taken: bool, w: World, k: Consta
     for face in range(4):
         if not w.free_face[r, c, face]:
             continue
-        if avoid_taken and _taken(r, n, cx, cy, face, w, k):
+        if avoid_taken and _taken(r, n, cx, cy, face, w, k, x):
             continue
         px = cx + FACE_X[face] * k.predock_offset
         py = cy + FACE_Y[face] * k.predock_offset
@@ -104,7 +129,7 @@ def _nearest_face(r: int, n: int, c: int, avoid_taken: bool, w: World, k: Consta
     return best
 
 
-@jit
+@inlined
 def _pursuit_check(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     """Abandon unless AWAITING_PICKUP was heard, else time out (``decide._pursuit_checks``)."""
     mode = w.mode[r, n]
@@ -121,32 +146,36 @@ def _pursuit_check(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -
         _to_walk(r, n, w)
 
 
-@jit
-def _switch_taken_face(r: int, n: int, w: World, k: Constants) -> None:
+@inlined
+def _switch_taken_face(r: int, n: int, w: World, k: Constants, x: Scratch) -> None:
     """A robot in PREDOCK whose point is taken moves on (``decide._switch_taken_faces``)."""
     if not k.avoid_taken_faces or w.mode[r, n] != _PREDOCK:
         return
     target = w.target[r, n]
     cx = w.carrier_pos[r, target, 0]
     cy = w.carrier_pos[r, target, 1]
-    if not _taken(r, n, cx, cy, max(w.face[r, n], 0), w, k):
+    if not _taken(r, n, cx, cy, max(w.face[r, n], 0), w, k, x):
         return
-    other = _nearest_face(r, n, target, True, w, k)
+    other = _nearest_face(r, n, target, True, w, k, x)
     if other >= 0:
         w.face[r, n] = other
 
 
-@jit
+@inlined
 def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
-    """Choose among the candidates (``decide._selection`` with ``policy.select``'s tie rule)."""
+    """Choose among the candidates (``decide._selection`` with ``policy.select``'s tie rule).
+
+    The candidates are the carriers the robot knows the position of this tick
+    (``Scratch.seen_*``), heard AWAITING_PICKUP, not cooling down, with a free face.
+    """
     best = -1
     best_score = 0.0
     best_distance = 0.0
     count = 0
-    for c in range(k.carriers):
+    for i in range(x.seen_count[r, n]):
+        c = x.seen_list[r, n, i]
         if not (
-            x.known[r, n, c]
-            and w.known_status[r, n, c] == _AWAITING
+            w.known_status[r, n, c] == _AWAITING
             and w.blocked_until[r, n, c] <= t
             and (
                 w.free_face[r, c, 0]
@@ -157,17 +186,25 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
         ):
             continue
         count += 1
-        distance = x.measured[r, n, c]
+        distance = x.seen_distance[r, n, i]
         score = _score(k.policy_kind, k.policy_parameter, float(w.known_urgency[r, n, c]), distance)
-        if best < 0 or score > best_score or (score == best_score and distance < best_distance):
+        # the largest score, then the smaller distance, then the smaller marker, in any order
+        if (
+            best < 0
+            or score > best_score
+            or (
+                score == best_score
+                and (distance < best_distance or (distance == best_distance and c < best))
+            )
+        ):
             best = c
             best_score = score
             best_distance = distance
     if best < 0:
         return
-    face = _nearest_face(r, n, best, False, w, k)
+    face = _nearest_face(r, n, best, False, w, k, x)
     if k.avoid_taken_faces:
-        open_face = _nearest_face(r, n, best, True, w, k)
+        open_face = _nearest_face(r, n, best, True, w, k, x)
         if open_face >= 0:
             face = open_face
     emit(r, n, _SELECT, best, float(w.known_urgency[r, n, best]), x)
@@ -178,7 +215,7 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     w.pursuit_start[r, n] = t
 
 
-@jit
+@inlined
 def _directions(
     r: int, n: int, turns: np.ndarray, row: int, w: World, k: Constants, x: Scratch
 ) -> None:
@@ -216,7 +253,7 @@ def _directions(
         w.stuck[r, n] = 0
 
 
-@jit
+@inlined
 def decide_robots(
     r: int,
     t: int,
@@ -234,7 +271,7 @@ def decide_robots(
     """
     for n in range(lo, hi):
         _pursuit_check(r, n, t, w, k, x)
-        _switch_taken_face(r, n, w, k)
+        _switch_taken_face(r, n, w, k, x)
         if x.before_mode[r, n] == _WALK and w.mode[r, n] == _WALK:
             _select(r, n, t, w, k, x)
         _directions(r, n, turns, row, w, k, x)

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 from swarmtag.sim.fast._events import emit
 from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, contact, maximum, minimum, norm
-from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._grid import near
+from swarmtag.sim.fast._index import index_obstacles
+from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
 __all__ = [
@@ -36,7 +38,7 @@ FAILURE_LOWERED = 2
 """``Scratch.failure``: a robot lowered a carrier it does not hold, or outside the drop-off area."""
 
 
-@jit
+@inlined
 def _to_walk(r: int, n: int, w: World) -> None:
     w.mode[r, n] = _WALK
     w.target[r, n] = -1
@@ -45,7 +47,7 @@ def _to_walk(r: int, n: int, w: World) -> None:
     w.redirect[r, n] = True
 
 
-@jit
+@inlined
 def arrive_run(r: int, stamp: int, w: World, k: Constants, x: Scratch) -> None:
     """The ``arrive`` step: stuck ticks, timers, arrivals, lift requests (``docking.arrive``).
 
@@ -105,7 +107,7 @@ def arrive_run(r: int, stamp: int, w: World, k: Constants, x: Scratch) -> None:
             x.lift[r, n] = w.target[r, n]
 
 
-@jit
+@inlined
 def dock_robots(r: int, lo: int, hi: int, w: World, x: Scratch) -> None:
     """Robots that drive in may overlap their carrier; centring ones stand on its centre."""
     for n in range(lo, hi):
@@ -117,7 +119,7 @@ def dock_robots(r: int, lo: int, hi: int, w: World, x: Scratch) -> None:
             w.robot_pos[r, n, 1] = w.carrier_pos[r, target, 1]
 
 
-@jit
+@inlined
 def answer_lifts(r: int, t: int, stamp: int, w: World, k: Constants, x: Scratch) -> bool:
     """The tags' answers to the lift writes (``world.answer_lifts``); whether any was accepted."""
     any_accepted = False
@@ -154,7 +156,7 @@ def answer_lifts(r: int, t: int, stamp: int, w: World, k: Constants, x: Scratch)
     return any_accepted
 
 
-@jit
+@inlined
 def carry_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
     """The ``carry`` step: lift, transport, release requests (``docking.carry``)."""
     for n in range(lo, hi):
@@ -180,9 +182,44 @@ def carry_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -
             _to_walk(r, n, w)
 
 
-@jit
-def free_faces_run(r: int, w: World, k: Constants) -> None:
-    """``predock.free_faces`` for every carrier of run ``r``: inside, clear of obstacles."""
+@inlined
+def _clear_of_obstacles(r: int, c: int, px: float, py: float, k: Constants, x: Scratch) -> bool:
+    """Whether a robot at ``(px, py)`` overlaps no obstacle carrier other than ``c``."""
+    count = x.obstacle_count[r]
+    if k.obstacle_grid:
+        size = k.grid_size
+        reach = k.carrier_half + k.robot_radius
+        count = near(
+            r,
+            px,
+            py,
+            reach,
+            k.grid_cell,
+            size,
+            size,
+            x.obstacle_start,
+            x.obstacle_items,
+            x.near_blockers,
+            False,
+        )
+    for j in range(count):
+        i = x.near_blockers[r, j] if k.obstacle_grid else j
+        if x.obstacles[r, i] == c:
+            continue
+        _, _, depth = contact(
+            px - x.obstacle_x[r, i], py - x.obstacle_y[r, i], k.carrier_half, k.robot_radius, 1.0
+        )
+        if depth > 0:
+            return False
+    return True
+
+
+@inlined
+def free_faces_run(r: int, w: World, k: Constants, x: Scratch) -> None:
+    """``predock.free_faces`` for every carrier of run ``r``: inside, clear of obstacles.
+
+    Reads the run's obstacle index (``_index.index_obstacles``), which must be current.
+    """
     low = k.robot_radius
     high = k.arena - k.robot_radius
     for c in range(k.carriers):
@@ -192,24 +229,10 @@ def free_faces_run(r: int, w: World, k: Constants) -> None:
             px = cx + FACE_X[face] * k.predock_offset
             py = cy + FACE_Y[face] * k.predock_offset
             free = low <= px <= high and low <= py <= high
-            if free:
-                for other in range(k.carriers):
-                    if other == c or not w.present[r, other] or w.carried_by[r, other] >= 0:
-                        continue
-                    _, _, depth = contact(
-                        px - w.carrier_pos[r, other, 0],
-                        py - w.carrier_pos[r, other, 1],
-                        k.carrier_half,
-                        k.robot_radius,
-                        1.0,
-                    )
-                    if depth > 0:
-                        free = False
-                        break
-            w.free_face[r, c, face] = free
+            w.free_face[r, c, face] = free and _clear_of_obstacles(r, c, px, py, k, x)
 
 
-@jit
+@inlined
 def deliver_run(r: int, t: int, lifted: bool, w: World, k: Constants, x: Scratch) -> None:
     """Drive-offs, set-downs and IDLE writes (``world.deliver``); free faces after a lift."""
     for n in range(k.robots):
@@ -233,4 +256,5 @@ def deliver_run(r: int, t: int, lifted: bool, w: World, k: Constants, x: Scratch
         w.delivery_urgency[r, c] = w.urgency[r, c]
         emit(r, n, _DELIVER, c, float(w.urgency[r, c]), x)
     if lifted:
-        free_faces_run(r, w, k)
+        index_obstacles(r, w, k, x)  # one obstacle fewer
+        free_faces_run(r, w, k, x)

@@ -10,13 +10,13 @@ in never shows.
 
 from __future__ import annotations
 
-from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import EVENT_SLOTS, Scratch
 
 __all__ = ["emit", "flush_slots", "room_for_tick"]
 
 
-@jit
+@inlined
 def emit(r: int, n: int, kind: int, carrier: int, value: float, x: Scratch) -> None:
     """Record event ``kind`` (1-8) of robot ``n`` in run ``r`` this tick."""
     x.slot_on[r, n, kind - 1] = True
@@ -24,14 +24,14 @@ def emit(r: int, n: int, kind: int, carrier: int, value: float, x: Scratch) -> N
     x.slot_value[r, n, kind - 1] = value
 
 
-@jit
+@inlined
 def room_for_tick(r: int, robots: int, x: Scratch) -> bool:
     """Whether run ``r``'s buffer can take every event one tick could make."""
     room: bool = x.event_count[r] + robots * EVENT_SLOTS <= x.event_tick.shape[1]
     return room
 
 
-@jit
+@inlined
 def flush_slots(r: int, t: int, robots: int, x: Scratch) -> None:
     """Append the slots of tick ``t`` to run ``r``'s buffer and clear them."""
     row = x.event_count[r]

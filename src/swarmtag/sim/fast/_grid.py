@@ -16,19 +16,19 @@ import math
 
 import numpy as np
 
-from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._jit import inlined
 
 __all__ = ["fill", "near"]
 
 
-@jit
+@inlined
 def _cell(value: float, cell: float, size: int) -> int:
     """The cell index of a coordinate, clamped to the grid."""
     index = math.floor(value / cell)
     return min(max(index, 0), size - 1)
 
 
-@jit
+@inlined
 def fill(
     r: int,
     xs: np.ndarray,
@@ -55,7 +55,7 @@ def fill(
         items[r, start[r, k]] = i
 
 
-@jit
+@inlined
 def near(
     r: int,
     x: float,
@@ -67,8 +67,13 @@ def near(
     start: np.ndarray,
     items: np.ndarray,
     out: np.ndarray,
+    ordered: bool,
 ) -> int:
-    """Points of run ``r`` in the cells within ``reach`` of ``(x, y)``, ascending, into ``out``."""
+    """Points of run ``r`` in the cells within ``reach`` of ``(x, y)`` into ``out[r]``.
+
+    ``ordered``: ascending (sums over bodies), else in cell order (tests whose
+    answer does not depend on the order).
+    """
     found = 0
     low_x = _cell(x - reach, cell, columns)
     high_x = _cell(x + reach, cell, columns)
@@ -79,11 +84,11 @@ def near(
             k = gx * rows + gy
             for slot in range(start[r, k], start[r, k + 1]):
                 item = items[r, slot]
-                # insertion sort: the lists are short
                 position = found
-                while position > 0 and out[r, position - 1] > item:
-                    out[r, position] = out[r, position - 1]
-                    position -= 1
+                if ordered:  # insertion sort: the lists are short
+                    while position > 0 and out[r, position - 1] > item:
+                        out[r, position] = out[r, position - 1]
+                        position -= 1
                 out[r, position] = item
                 found += 1
     return found

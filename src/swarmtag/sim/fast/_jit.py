@@ -1,4 +1,4 @@
-"""The numba decorators of the compiled kernel: cached, no fast-math, no GIL, no reference counts.
+"""The numba decorators of the compiled kernel: cached, IEEE arithmetic, no GIL, no refcounts.
 
 ``fastmath`` stays off so that every ``+``, ``*``, ``/`` and ``sqrt`` is one
 correctly rounded IEEE operation, as in numpy (no contraction into FMA, no
@@ -7,13 +7,20 @@ for bit. ``cache=True`` keeps the machine code beside the sources, so a second
 process starts without compiling; ``nogil=True`` lets several Python threads
 run kernels at once (the backend's parallelism over runs).
 
-``jit`` also turns numba's reference counting off (``_nrt=False``). The
-kernel's functions take the state as tuples of some eighty arrays and
-allocate nothing; with reference counting on, every call of a function with
-more than one branch increfs and decrefs every array of every tuple (atomic
-operations, measured at about 260 ns a call against 0.2 ns without), which
-made the kernel as slow as numpy. Only ``counted``, the entry point that
-picks each run's generators out of typed lists, keeps it.
+Two measured costs shape the rest:
+
+- numba's reference counting is off (``_nrt=False``): the kernel's functions
+  take the state as tuples of about a hundred arrays and allocate nothing;
+  with it on, every call of a function with more than one branch increfs and
+  decrefs every array of every tuple (atomic operations: about 260 ns a call
+  against 0.2 ns without). Only ``counted`` entry points, which pick each
+  run's generators out of typed lists, keep it.
+- a call that is not inlined copies every array descriptor of those tuples
+  (about 7 KB): the kernel ran 3 times slower with its phases as real calls.
+  So every function that takes the state is ``inlined`` (LLVM's
+  ``alwaysinline``; numba's own inliner gave the same speed but compiled for
+  2.5 minutes instead of 1.5): a tick is one function. Leaves that take only
+  numbers are plain ``jit``.
 """
 
 from __future__ import annotations
@@ -28,6 +35,12 @@ __all__ = ["counted", "inlined", "jit"]
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 _njit: Any = numba.njit  # ``_nrt`` is not in numba's typed signature of njit
+_OPTIONS: dict[str, Any] = {
+    "cache": True,
+    "fastmath": False,
+    "error_model": "numpy",
+    "nogil": True,
+}
 
 
 def jit(function: _F) -> _F:
@@ -35,21 +48,17 @@ def jit(function: _F) -> _F:
 
     It must allocate nothing (no new arrays, lists or objects).
     """
-    compiled: _F = _njit(cache=True, fastmath=False, error_model="numpy", nogil=True, _nrt=False)(
-        function
-    )
+    compiled: _F = _njit(**_OPTIONS, _nrt=False)(function)
     return compiled
 
 
 def inlined(function: _F) -> _F:
-    """Like ``jit``, inlined into its callers by numba (small helpers called per pair)."""
-    compiled: _F = _njit(
-        cache=True, fastmath=False, error_model="numpy", nogil=True, _nrt=False, inline="always"
-    )(function)
+    """Like ``jit``, and always inlined into its callers (functions that take the state)."""
+    compiled: _F = _njit(**_OPTIONS, _nrt=False, forceinline=True)(function)
     return compiled
 
 
 def counted(function: _F) -> _F:
     """Like ``jit`` with numba's reference counting on (typed lists, array views)."""
-    compiled: _F = _njit(cache=True, fastmath=False, error_model="numpy", nogil=True)(function)
+    compiled: _F = _njit(**_OPTIONS)(function)
     return compiled

@@ -141,6 +141,10 @@ class Constants(NamedTuple):
     """Find each robot's obstacle carriers with the grid (many carriers) rather than a scan."""
     robot_grid: bool
     """Find each robot's neighbours with the grid (many robots) rather than a scan."""
+    sight_cell: float
+    """Side of a coarse grid cell: the camera's range (at least ``grid_cell``)."""
+    sight_size: int
+    """Coarse cells along each side of the arena's grid."""
 
 
 class Scratch(NamedTuple):
@@ -153,8 +157,12 @@ class Scratch(NamedTuple):
     breakdown_draw: F8
     radio_draw: F8
     noise: F8
-    known: B1
-    measured: F8
+    seen_count: I8
+    """(R, N) carriers each robot knows the position of this tick (its ``seen_*`` list)."""
+    seen_list: I8
+    """(R, N, C) those carriers (any order)."""
+    seen_distance: F8
+    """(R, N, C) the distance to each, as the policy uses it (camera noise included)."""
     blocker: I8
     """(R, N, C) the carrier that last hid each carrier from each robot (tried first), -1 none."""
     proposed: F8
@@ -182,17 +190,33 @@ class Scratch(NamedTuple):
     obstacle_count: I8
     obstacle_x: F8
     """(R, C) the obstacles' x, in ``obstacles`` order."""
+    obstacle_box: F8
+    """(R, 4) the smallest and largest x, then y, of the obstacles' centres."""
     obstacle_y: F8
     obstacle_start: I8
     """(R, cells + 1) the obstacles' grid (``_grid``): where each cell's list starts."""
     obstacle_items: I8
     """(R, C) the obstacles' grid: positions in ``obstacles``, cell by cell."""
     robot_start: I8
-    """(R, cells + 1) the robots' grid of a collision pass (large swarms)."""
+    """(R, cells + 1) the robots' grid: at the tick's start, then of each collision pass."""
     robot_items: I8
     """(R, N) the robots' grid: robot ids, cell by cell."""
+    sight_start: I8
+    """(R, sight cells + 1) the obstacles' coarse grid (cells as wide as the camera's range)."""
+    sight_items: I8
+    """(R, C) the obstacles' coarse grid: positions in ``obstacles``, cell by cell."""
+    crowd_start: I8
+    """(R, sight cells + 1) the robots' coarse grid at the tick's start (robots hide carriers)."""
+    crowd_items: I8
+    """(R, N) the robots' coarse grid: robot ids, cell by cell."""
     gathered: I8
-    """(R, max(N, C)) bodies a grid query found, ascending."""
+    """(R, max(N, C)) bodies a grid query found, ascending (collisions)."""
+    near_carriers: I8
+    """(R, C) carriers a camera query found (any order)."""
+    near_blockers: I8
+    """(R, C) obstacles a line-of-sight query found (any order)."""
+    near_robots: I8
+    """(R, N) robots a query around a point or a line of sight found (any order)."""
 
     slot_on: B1
     slot_carrier: I8
@@ -218,6 +242,7 @@ def constants_of(params: Params) -> Constants:
     kind, parameter = policy_code(params)
     half, radius = params.carrier_half, params.robot_radius
     cell = max(2 * half, half + radius, 2 * radius)
+    sight = max(cell, params.camera_range)
     return Constants(
         robots=params.robots,
         carriers=params.carriers,
@@ -261,6 +286,8 @@ def constants_of(params: Params) -> Constants:
         grid_size=int(params.arena / cell) + 1,
         obstacle_grid=params.carriers > GRID_FROM,
         robot_grid=params.robots > GRID_FROM,
+        sight_cell=sight,
+        sight_size=int(params.arena / sight) + 1,
     )
 
 
@@ -278,8 +305,13 @@ def state_of(world: World, template: WorldState) -> WorldState:
     return replace(template, tick=tick, **arrays)
 
 
-def scratch_for(runs: int, robots: int, carriers: int, capacity: int, cells: int) -> Scratch:
-    """Working space for ``runs`` runs, event buffers of ``capacity`` rows, grids of ``cells``."""
+def scratch_for(
+    runs: int, robots: int, carriers: int, capacity: int, cells: int, sight_cells: int
+) -> Scratch:
+    """Working space for ``runs`` runs: event buffers of ``capacity`` rows, grids.
+
+    The grids have ``cells`` cells (collisions) and ``sight_cells`` (perception).
+    """
     n, c = (runs, robots), (runs, carriers)
     nc = (runs, robots, carriers)
 
@@ -294,8 +326,9 @@ def scratch_for(runs: int, robots: int, carriers: int, capacity: int, cells: int
         breakdown_draw=floats(*n),
         radio_draw=floats(*nc),
         noise=floats(*nc, 2),
-        known=np.zeros(nc, dtype=bool),
-        measured=floats(*nc),
+        seen_count=np.zeros(n, dtype=np.int64),
+        seen_list=np.zeros(nc, dtype=np.int64),
+        seen_distance=floats(*nc),
         blocker=np.full(nc, -1, dtype=np.int64),
         proposed=floats(*n, 2),
         x=floats(*n),
@@ -319,12 +352,20 @@ def scratch_for(runs: int, robots: int, carriers: int, capacity: int, cells: int
         obstacles=np.zeros(c, dtype=np.int64),
         obstacle_count=np.zeros(runs, dtype=np.int64),
         obstacle_x=floats(*c),
+        obstacle_box=floats(runs, 4),
         obstacle_y=floats(*c),
         obstacle_start=np.zeros((runs, cells + 1), dtype=np.int64),
         obstacle_items=np.zeros(c, dtype=np.int64),
         robot_start=np.zeros((runs, cells + 1), dtype=np.int64),
         robot_items=np.zeros(n, dtype=np.int64),
+        sight_start=np.zeros((runs, sight_cells + 1), dtype=np.int64),
+        sight_items=np.zeros(c, dtype=np.int64),
+        crowd_start=np.zeros((runs, sight_cells + 1), dtype=np.int64),
+        crowd_items=np.zeros(n, dtype=np.int64),
         gathered=np.zeros((runs, max(robots, carriers)), dtype=np.int64),
+        near_carriers=np.zeros(c, dtype=np.int64),
+        near_blockers=np.zeros(c, dtype=np.int64),
+        near_robots=np.zeros(n, dtype=np.int64),
         slot_on=np.zeros((*n, EVENT_SLOTS), dtype=bool),
         slot_carrier=np.zeros((*n, EVENT_SLOTS), dtype=np.int64),
         slot_value=np.zeros((*n, EVENT_SLOTS)),

@@ -25,7 +25,7 @@ from swarmtag.sim.fast._geometry import (
     turn_towards,
 )
 from swarmtag.sim.fast._grid import fill, near
-from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
 __all__ = ["move_robots", "resolve_run"]
@@ -33,7 +33,7 @@ __all__ = ["move_robots", "resolve_run"]
 _WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
 
 
-@jit
+@inlined
 def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
     """Proposed positions, turned headings, sidesteps counted down (``motion.move``)."""
     for n in range(lo, hi):
@@ -91,30 +91,9 @@ def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
             w.heading[r, n, 1] = hy
 
 
-@jit
+@inlined
 def _bodies(r: int, w: World, k: Constants, x: Scratch) -> None:
-    """Each robot's rounded box, whether it can be pushed, the obstacles (``motion._bodies``)."""
-    count = 0
-    for c in range(k.carriers):
-        if w.present[r, c] and w.carried_by[r, c] < 0:
-            x.obstacles[r, count] = c
-            x.obstacle_x[r, count] = w.carrier_pos[r, c, 0]
-            x.obstacle_y[r, count] = w.carrier_pos[r, c, 1]
-            count += 1
-    x.obstacle_count[r] = count
-    if k.obstacle_grid:
-        size = k.grid_size
-        fill(
-            r,
-            x.obstacle_x,
-            x.obstacle_y,
-            count,
-            k.grid_cell,
-            size,
-            size,
-            x.obstacle_start,
-            x.obstacle_items,
-        )
+    """Each robot's rounded box and whether it can be pushed (``motion._bodies``)."""
     for n in range(k.robots):
         mode = w.mode[r, n]
         loaded = (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and w.target[r, n] >= 0
@@ -123,7 +102,25 @@ def _bodies(r: int, w: World, k: Constants, x: Scratch) -> None:
         x.movable[r, n] = not (mode in (_CENTRE, _LIFT) or mode >= _RELEASE)
 
 
-@jit
+@inlined
+def _beyond_obstacles(r: int, xn: float, yn: float, reach: float, x: Scratch) -> bool:
+    """Whether every obstacle is at least ``reach`` away along x or y (none can touch).
+
+    Rounding is monotonic: ``xn - high >= reach`` gives ``xn - cx >= reach`` for
+    every obstacle ``cx <= high``, so the exact test would reject every pair.
+    """
+    box = x.obstacle_box
+    away: bool = (
+        x.obstacle_count[r] == 0
+        or xn - box[r, 1] >= reach
+        or box[r, 0] - xn >= reach
+        or yn - box[r, 3] >= reach
+        or box[r, 2] - yn >= reach
+    )
+    return away
+
+
+@inlined
 def _robot_sums(
     r: int, n: int, xn: float, yn: float, ids: np.ndarray, count: int, listed: bool, x: Scratch
 ) -> tuple[float, float]:
@@ -152,7 +149,7 @@ def _robot_sums(
     return total_x, total_y
 
 
-@jit
+@inlined
 def _obstacle_sums(
     r: int,
     n: int,
@@ -186,7 +183,7 @@ def _obstacle_sums(
     return total_x, total_y
 
 
-@jit
+@inlined
 def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
     """One Jacobi pass from ``x.x, x.y`` into ``x.new_x, x.new_y``; whether anyone moved."""
     moved = False
@@ -207,13 +204,25 @@ def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
         if x.movable[r, n]:
             if k.robot_grid:
                 count = near(
-                    r, xn, yn, cell, cell, size, size, x.robot_start, x.robot_items, x.gathered
+                    r,
+                    xn,
+                    yn,
+                    cell,
+                    cell,
+                    size,
+                    size,
+                    x.robot_start,
+                    x.robot_items,
+                    x.gathered,
+                    True,
                 )
                 robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, count, True, x)
             else:
                 robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, k.robots, False, x)
             reach = (extent + half) + radius
-            if k.obstacle_grid:
+            if _beyond_obstacles(r, xn, yn, reach, x):
+                pass
+            elif k.obstacle_grid:
                 count = near(
                     r,
                     xn,
@@ -225,6 +234,7 @@ def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
                     x.obstacle_start,
                     x.obstacle_items,
                     x.gathered,
+                    True,
                 )
                 carrier_x, carrier_y = _obstacle_sums(
                     r, n, xn, yn, x.gathered, count, True, w, k, x
@@ -244,7 +254,7 @@ def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
     return moved
 
 
-@jit
+@inlined
 def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
     """Resolve collisions of the proposed positions of run ``r`` (``motion.resolve``)."""
     _bodies(r, w, k, x)

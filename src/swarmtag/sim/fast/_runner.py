@@ -167,9 +167,14 @@ class _Batch:
         self.world = world_of(state)
         self.constants = constants_of(params)
         k = self.constants
-        cells = k.grid_size**2 if k.obstacle_grid or k.robot_grid else 1
+        gridded = k.obstacle_grid or k.robot_grid
         self.scratch = scratch_for(
-            runs, robots, params.carriers, capacity=_capacity(robots), cells=cells
+            runs,
+            robots,
+            params.carriers,
+            capacity=_capacity(robots),
+            cells=k.grid_size**2 if gridded else 1,
+            sight_cells=k.sight_size**2 if gridded else 1,
         )
         self.streams = _Streams(params, seed, [int(run) for run in state.run_ids])
         self.events = EventRecorder()

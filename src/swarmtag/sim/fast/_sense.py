@@ -1,9 +1,11 @@
 """Phase 1 of a compiled tick, sense: ``sim/sense.py`` for one run, robot by robot.
 
-Writes the robots' tag caches and sightings in place and leaves, per robot
-and carrier, whether its position is known and the distance the policy uses
-(``Scratch.known``, ``Scratch.measured``). Everything is read from the state
-at the end of the previous tick, as in the reference.
+Writes the robots' tag caches and sightings in place and leaves, per robot,
+the carriers whose position it knows and the distance the policy uses to
+each (``Scratch.seen_*``). Everything is read from the state at the end of
+the previous tick, as in the reference. Where the run's index has grids
+(``_index``), the camera and the lines of sight look only at the bodies
+nearby; the tests they apply are the reference's.
 """
 
 from __future__ import annotations
@@ -11,7 +13,8 @@ from __future__ import annotations
 import math
 
 from swarmtag.sim.fast._geometry import segment_crosses_box, segment_near_point
-from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._grid import near
+from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
 __all__ = ["sense_robots", "tags_advertising"]
@@ -20,7 +23,7 @@ _WALK = 0
 _AWAITING = 1
 
 
-@jit
+@inlined
 def tags_advertising(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     """Which tags of run ``r`` advertise during tick ``t`` (``sense.advertising``).
 
@@ -39,7 +42,7 @@ def tags_advertising(r: int, t: int, w: World, k: Constants, x: Scratch) -> None
     x.advertising_count[r] = count
 
 
-@jit
+@inlined
 def _blocks(r: int, c: int, other: int, sx: float, sy: float, w: World, k: Constants) -> bool:
     """Whether carrier ``other`` (an obstacle) hides carrier ``c`` from the point ``(sx, sy)``."""
     if other == c or not w.present[r, other] or w.carried_by[r, other] >= 0:
@@ -55,89 +58,197 @@ def _blocks(r: int, c: int, other: int, sx: float, sy: float, w: World, k: Const
     )
 
 
-@jit
-def _line_of_sight(r: int, n: int, c: int, w: World, k: Constants, x: Scratch) -> bool:
-    """``sense.line_of_sight`` for one sighting: no other carrier (or robot) in the way.
+@inlined
+def _hidden_by_carriers(r: int, n: int, c: int, w: World, k: Constants, x: Scratch) -> bool:
+    """Whether another obstacle carrier crosses the line of sight from robot ``n`` to ``c``.
 
     The carrier that hid ``c`` from this robot last time is tried first (the
-    answer does not depend on the order, and it usually still does).
+    answer does not depend on the order, and it usually still does); with a
+    grid, only the obstacles in cells the segment's box (grown by a carrier's
+    half side) touches are tried.
     """
     sx = w.robot_pos[r, n, 0]
     sy = w.robot_pos[r, n, 1]
     last = x.blocker[r, n, c]
     if last >= 0 and _blocks(r, c, last, sx, sy, w, k):
+        return True
+    if not k.obstacle_grid:
+        for j in range(x.obstacle_count[r]):
+            other = x.obstacles[r, j]
+            if other != last and _blocks(r, c, other, sx, sy, w, k):
+                x.blocker[r, n, c] = other
+                return True
         return False
-    for other in range(k.carriers):
+    ex = w.carrier_pos[r, c, 0]
+    ey = w.carrier_pos[r, c, 1]
+    reach = max(abs(ex - sx), abs(ey - sy)) * 0.5 + k.carrier_half
+    size = k.sight_size
+    count = near(
+        r,
+        (sx + ex) * 0.5,
+        (sy + ey) * 0.5,
+        reach,
+        k.sight_cell,
+        size,
+        size,
+        x.sight_start,
+        x.sight_items,
+        x.near_blockers,
+        False,
+    )
+    for j in range(count):
+        other = x.obstacles[r, x.near_blockers[r, j]]
         if other != last and _blocks(r, c, other, sx, sy, w, k):
             x.blocker[r, n, c] = other
-            return False
-    if k.occlusion >= 2:
-        ex = w.carrier_pos[r, c, 0]
-        ey = w.carrier_pos[r, c, 1]
-        for m in range(k.robots):
-            if m != n and segment_near_point(
-                sx, sy, ex, ey, w.robot_pos[r, m, 0], w.robot_pos[r, m, 1], k.robot_radius
-            ):
-                return False
-    return True
+            return True
+    return False
 
 
-@jit
+@inlined
+def _hidden_by_robots(r: int, n: int, c: int, w: World, k: Constants, x: Scratch) -> bool:
+    """Whether the line of sight from robot ``n`` to carrier ``c`` passes near another robot."""
+    sx = w.robot_pos[r, n, 0]
+    sy = w.robot_pos[r, n, 1]
+    ex = w.carrier_pos[r, c, 0]
+    ey = w.carrier_pos[r, c, 1]
+    count = k.robots
+    if k.robot_grid:
+        reach = max(abs(ex - sx), abs(ey - sy)) * 0.5 + k.robot_radius
+        size = k.sight_size
+        count = near(
+            r,
+            (sx + ex) * 0.5,
+            (sy + ey) * 0.5,
+            reach,
+            k.sight_cell,
+            size,
+            size,
+            x.crowd_start,
+            x.crowd_items,
+            x.near_robots,
+            False,
+        )
+    for j in range(count):
+        m = x.near_robots[r, j] if k.robot_grid else j
+        if m != n and segment_near_point(
+            sx, sy, ex, ey, w.robot_pos[r, m, 0], w.robot_pos[r, m, 1], k.robot_radius
+        ):
+            return True
+    return False
+
+
+@inlined
+def _line_of_sight(r: int, n: int, c: int, w: World, k: Constants, x: Scratch) -> bool:
+    """``sense.line_of_sight`` for one sighting: no other carrier (or robot) in the way."""
+    if _hidden_by_carriers(r, n, c, w, k, x):
+        return False
+    return not (k.occlusion >= 2 and _hidden_by_robots(r, n, c, w, k, x))
+
+
+@inlined
+def _remember(r: int, n: int, c: int, distance: float, x: Scratch) -> None:
+    """Add carrier ``c`` at ``distance`` to robot ``n``'s known carriers of this tick."""
+    count = x.seen_count[r, n]
+    x.seen_list[r, n, count] = c
+    x.seen_distance[r, n, count] = distance
+    x.seen_count[r, n] = count + 1
+
+
+@inlined
 def _camera(
     r: int, n: int, c: int, t: int, ox: float, oy: float, w: World, k: Constants, x: Scratch
 ) -> None:
-    """Carrier ``c`` seen now by robot ``n`` (memory 0): its sighting, known, measured distance."""
+    """Carrier ``c``, in range of robot ``n``'s camera (memory 0): a sighting if in view."""
     if k.occlusion > 0 and not _line_of_sight(r, n, c, w, k, x):
-        x.known[r, n, c] = False
         return
     if k.detection_noise > 0:
         w.seen_pos[r, n, c, 0] = w.carrier_pos[r, c, 0] + x.noise[r, n, c, 0]
         w.seen_pos[r, n, c, 1] = w.carrier_pos[r, c, 1] + x.noise[r, n, c, 1]
         dx = ox + x.noise[r, n, c, 0]
         dy = oy + x.noise[r, n, c, 1]
-        x.measured[r, n, c] = math.sqrt(dx * dx + dy * dy)
+        _remember(r, n, c, math.sqrt(dx * dx + dy * dy), x)
     else:
         w.seen_pos[r, n, c, 0] = w.carrier_pos[r, c, 0]
         w.seen_pos[r, n, c, 1] = w.carrier_pos[r, c, 1]
-        x.measured[r, n, c] = math.sqrt(ox * ox + oy * oy)
+        _remember(r, n, c, math.sqrt(ox * ox + oy * oy), x)
     w.seen_tick[r, n, c] = t
-    x.known[r, n, c] = True
 
 
-@jit
+@inlined
+def _hear(r: int, n: int, t: int, slot: int, w: World, k: Constants, x: Scratch) -> None:
+    """Robot ``n`` hears this tick's advertisements in range (split perception)."""
+    rx = w.robot_pos[r, n, 0]
+    ry = w.robot_pos[r, n, 1]
+    for i in range(x.advertising_count[r]):
+        c = x.advertising[r, i]
+        ox = w.carrier_pos[r, c, 0] - rx
+        oy = w.carrier_pos[r, c, 1] - ry
+        if not math.sqrt(ox * ox + oy * oy) <= k.radio_range:
+            continue
+        if k.advertisement_loss > 0 and x.radio_draw[r, n, c] < k.advertisement_loss:
+            continue
+        w.known_status[r, n, c] = w.adv_status[r, slot, c]
+        w.known_urgency[r, n, c] = w.adv_urgency[r, slot, c]
+        w.heard_tick[r, n, c] = t
+
+
+@inlined
+def _out_of_sight(r: int, rx: float, ry: float, k: Constants, x: Scratch) -> bool:
+    """Whether every obstacle carrier is beyond the camera's range along x or y.
+
+    The margin (a millionth of the range, many ulps) makes it safe against
+    rounding: a carrier that far along one axis fails ``distance <= range``.
+    """
+    box = x.obstacle_box
+    far = k.camera_range * (1.0 + 1e-6) + 1e-9
+    away: bool = (
+        x.obstacle_count[r] == 0
+        or rx - box[r, 1] > far
+        or box[r, 0] - rx > far
+        or ry - box[r, 3] > far
+        or box[r, 2] - ry > far
+    )
+    return away
+
+
+@inlined
 def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
     """Split perception without memory, doing only the work that can change something.
 
     The radio loop visits the tags that advertise this tick; the camera only
-    matters for robots walking at the tick's start and carriers they heard
-    AWAITING_PICKUP (nothing else can be a candidate, ``sense.actionable``),
-    and ``known``/``measured`` are only read for those robots.
+    matters for robots walking at the tick's start and the obstacle carriers
+    they heard AWAITING_PICKUP (nothing else can be a candidate,
+    ``sense.actionable``); the known carriers are only read for those robots.
     """
     slot = (t - 1 - k.status_delay) % (k.status_delay + 1)
-    lossy = k.advertisement_loss > 0
     for n in range(lo, hi):
-        rx = w.robot_pos[r, n, 0]
-        ry = w.robot_pos[r, n, 1]
-        for i in range(x.advertising_count[r]):
-            c = x.advertising[r, i]
-            ox = w.carrier_pos[r, c, 0] - rx
-            oy = w.carrier_pos[r, c, 1] - ry
-            if not math.sqrt(ox * ox + oy * oy) <= k.radio_range:
-                continue
-            if lossy and x.radio_draw[r, n, c] < k.advertisement_loss:
-                continue
-            w.known_status[r, n, c] = w.adv_status[r, slot, c]
-            w.known_urgency[r, n, c] = w.adv_urgency[r, slot, c]
-            w.heard_tick[r, n, c] = t
+        _hear(r, n, t, slot, w, k, x)
+        x.seen_count[r, n] = 0
         if w.mode[r, n] != _WALK:
             continue
-        for c in range(k.carriers):
-            x.known[r, n, c] = False
-            if (
-                w.known_status[r, n, c] != _AWAITING
-                or not w.present[r, c]
-                or w.carried_by[r, c] >= 0
-            ):
+        rx = w.robot_pos[r, n, 0]
+        ry = w.robot_pos[r, n, 1]
+        if _out_of_sight(r, rx, ry, k, x):
+            continue
+        count = x.obstacle_count[r]
+        if k.obstacle_grid:
+            size = k.sight_size
+            count = near(
+                r,
+                rx,
+                ry,
+                k.camera_range,
+                k.sight_cell,
+                size,
+                size,
+                x.sight_start,
+                x.sight_items,
+                x.near_carriers,
+                False,
+            )
+        for j in range(count):
+            c = x.obstacles[r, x.near_carriers[r, j] if k.obstacle_grid else j]
+            if w.known_status[r, n, c] != _AWAITING:
                 continue
             ox = w.carrier_pos[r, c, 0] - rx
             oy = w.carrier_pos[r, c, 1] - ry
@@ -145,7 +256,7 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
                 _camera(r, n, c, t, ox, oy, w, k, x)
 
 
-@jit
+@inlined
 def sense_robots(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
     """Sense tick ``t`` for robots ``lo .. hi - 1`` of run ``r`` (``sense.sense``)."""
     if k.split and k.memory_ticks == 0:
@@ -154,7 +265,7 @@ def sense_robots(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x: Sc
         _sense_every_pair(r, t, lo, hi, w, k, x)
 
 
-@jit
+@inlined
 def _sense_every_pair(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
     """``sense.sense`` pair by pair: the disc model, and split perception with memory."""
     delay = k.status_delay
@@ -164,7 +275,7 @@ def _sense_every_pair(r: int, t: int, lo: int, hi: int, w: World, k: Constants, 
     for n in range(lo, hi):
         rx = w.robot_pos[r, n, 0]
         ry = w.robot_pos[r, n, 1]
-        walking = w.mode[r, n] == _WALK
+        x.seen_count[r, n] = 0
         for c in range(k.carriers):
             ox = w.carrier_pos[r, c, 0] - rx
             oy = w.carrier_pos[r, c, 1] - ry
@@ -182,8 +293,6 @@ def _sense_every_pair(r: int, t: int, lo: int, hi: int, w: World, k: Constants, 
                 w.known_status[r, n, c] = w.adv_status[r, slot, c]
                 w.known_urgency[r, n, c] = w.adv_urgency[r, slot, c]
                 w.heard_tick[r, n, c] = t
-            if k.split and k.memory_ticks == 0:
-                visible = visible and walking and w.known_status[r, n, c] == _AWAITING
             if k.split and k.occlusion > 0 and visible:
                 visible = _line_of_sight(r, n, c, w, k, x)
             if visible:
@@ -194,17 +303,16 @@ def _sense_every_pair(r: int, t: int, lo: int, hi: int, w: World, k: Constants, 
                     w.seen_pos[r, n, c, 0] = w.carrier_pos[r, c, 0]
                     w.seen_pos[r, n, c, 1] = w.carrier_pos[r, c, 1]
                 w.seen_tick[r, n, c] = t
-            if k.split and k.memory_ticks > 0:
+            if k.split:  # with memory (without, _sense_split_now senses)
                 seen = w.seen_tick[r, n, c]
-                x.known[r, n, c] = seen >= 0 and t - seen <= k.memory_ticks and present
-                dx = w.seen_pos[r, n, c, 0] - rx
-                dy = w.seen_pos[r, n, c, 1] - ry
-                x.measured[r, n, c] = math.sqrt(dx * dx + dy * dy)
-            else:
-                x.known[r, n, c] = visible
+                if seen >= 0 and t - seen <= k.memory_ticks and present:
+                    dx = w.seen_pos[r, n, c, 0] - rx
+                    dy = w.seen_pos[r, n, c, 1] - ry
+                    _remember(r, n, c, math.sqrt(dx * dx + dy * dy), x)
+            elif visible:
                 if noisy:
                     dx = ox + x.noise[r, n, c, 0]
                     dy = oy + x.noise[r, n, c, 1]
-                    x.measured[r, n, c] = math.sqrt(dx * dx + dy * dy)
+                    _remember(r, n, c, math.sqrt(dx * dx + dy * dy), x)
                 else:
-                    x.measured[r, n, c] = distance
+                    _remember(r, n, c, distance, x)

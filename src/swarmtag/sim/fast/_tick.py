@@ -26,7 +26,8 @@ from swarmtag.sim.fast._docking import (
     dock_robots,
 )
 from swarmtag.sim.fast._events import flush_slots, room_for_tick
-from swarmtag.sim.fast._jit import counted, jit
+from swarmtag.sim.fast._index import index_obstacles, index_robots
+from swarmtag.sim.fast._jit import counted, inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 from swarmtag.sim.fast._motion import move_robots, resolve_run
 from swarmtag.sim.fast._sense import sense_robots, tags_advertising
@@ -43,7 +44,7 @@ def _unit(g0: float, g1: float) -> tuple[float, float]:
     return g0 / length, g1 / length
 
 
-@jit
+@inlined
 def _draw(
     r: int,
     motion: np.random.Generator,
@@ -75,7 +76,7 @@ def _draw(
                 x.noise[r, n, c, 1] = camera.standard_normal() * k.detection_noise
 
 
-@jit
+@inlined
 def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
     """Grow urgencies, record what the tags advertise, end the run (``kernel._end_of_tick``)."""
     slot = t % (k.status_delay + 1)
@@ -93,7 +94,7 @@ def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
         w.ended_at[r] = t
 
 
-@jit
+@inlined
 def tick_run(
     r: int,
     t: int,
@@ -117,6 +118,8 @@ def tick_run(
         x.before_mode[r, n] = w.mode[r, n]
         x.before_pos[r, n, 0] = w.robot_pos[r, n, 0]
         x.before_pos[r, n, 1] = w.robot_pos[r, n, 1]
+    index_obstacles(r, w, k, x)
+    index_robots(r, w, k, x)
     if k.split:
         tags_advertising(r, t, w, k, x)
     sense_robots(r, t, 0, robots, w, k, x)

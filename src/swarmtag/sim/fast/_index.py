@@ -1,0 +1,84 @@
+"""The per-tick index of a run: its obstacle carriers and the grids that find bodies near a point.
+
+Built at the start of a tick from the state the tick starts from (and the
+obstacles again after a lift): the obstacle list (carriers in the arena and
+not carried, ascending), and for large swarms uniform grids (``_grid``) of
+the obstacles and of the robots, fine ones (cells as wide as a collision's
+reach) for collisions and taken faces, coarse ones (cells as wide as the
+camera's range) for sightings. A query that leaves a body out leaves out
+one that the exact test would reject, so the answers are the reference's.
+"""
+
+from __future__ import annotations
+
+import math
+
+from swarmtag.sim.fast._grid import fill
+from swarmtag.sim.fast._jit import inlined
+from swarmtag.sim.fast._layout import Constants, Scratch, World
+
+__all__ = ["index_obstacles", "index_robots"]
+
+
+@inlined
+def index_obstacles(r: int, w: World, k: Constants, x: Scratch) -> None:
+    """List run ``r``'s obstacle carriers (ascending), box them and, where used, grid them."""
+    count = 0
+    low_x = low_y = math.inf
+    high_x = high_y = -math.inf
+    for c in range(k.carriers):
+        if w.present[r, c] and w.carried_by[r, c] < 0:
+            cx = w.carrier_pos[r, c, 0]
+            cy = w.carrier_pos[r, c, 1]
+            x.obstacles[r, count] = c
+            x.obstacle_x[r, count] = cx
+            x.obstacle_y[r, count] = cy
+            low_x = min(low_x, cx)
+            high_x = max(high_x, cx)
+            low_y = min(low_y, cy)
+            high_y = max(high_y, cy)
+            count += 1
+    x.obstacle_count[r] = count
+    x.obstacle_box[r, 0] = low_x
+    x.obstacle_box[r, 1] = high_x
+    x.obstacle_box[r, 2] = low_y
+    x.obstacle_box[r, 3] = high_y
+    if k.obstacle_grid:
+        size = k.grid_size
+        fill(
+            r,
+            x.obstacle_x,
+            x.obstacle_y,
+            count,
+            k.grid_cell,
+            size,
+            size,
+            x.obstacle_start,
+            x.obstacle_items,
+        )
+        size = k.sight_size
+        fill(
+            r,
+            x.obstacle_x,
+            x.obstacle_y,
+            count,
+            k.sight_cell,
+            size,
+            size,
+            x.sight_start,
+            x.sight_items,
+        )
+
+
+@inlined
+def index_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
+    """Grid run ``r``'s robots where they stand at the tick's start (large swarms)."""
+    if not k.robot_grid:
+        return
+    for n in range(k.robots):
+        x.x[r, n] = w.robot_pos[r, n, 0]
+        x.y[r, n] = w.robot_pos[r, n, 1]
+    size = k.grid_size
+    fill(r, x.x, x.y, k.robots, k.grid_cell, size, size, x.robot_start, x.robot_items)
+    size = k.sight_size
+    fill(r, x.x, x.y, k.robots, k.sight_cell, size, size, x.crowd_start, x.crowd_items)
