@@ -24,7 +24,12 @@ from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_tab
 from swarmtag.io.ros_types import require_rosbags
 from swarmtag.policy import Policy, Proximity, Urgency, Weighted, parse_policy
 from swarmtag.sim import Scenario, simulate
-from swarmtag.sim.runner import CONTROLLERS, LOG_BYTES_PER_CARRIER, batch_memory
+from swarmtag.sim.runner import (
+    CONTROLLERS,
+    LOG_BYTES_PER_CARRIER,
+    batch_memory,
+    resolve_backend,
+)
 
 __all__ = ["DEFAULT_CONDITIONS", "run_conditions", "simulate_cmd"]
 
@@ -90,7 +95,13 @@ def _plan_outputs(
 
 
 def _check_work(
-    scenario: Scenario, conditions: int, runs: int, run_offset: int, *, record: bool = False
+    scenario: Scenario,
+    conditions: int,
+    runs: int,
+    run_offset: int,
+    *,
+    record: bool = False,
+    backend: str = "reference",
 ) -> None:
     """Refuse run counts whose logs (and a recorded run, ``record``) cannot fit in memory."""
     if run_offset + runs > MAX_RUN_INDEX:
@@ -100,7 +111,8 @@ def _check_work(
         f"--runs {runs} of {conditions} condition(s) with {scenario.carriers} carriers",
         conditions * runs * scenario.carriers * LOG_BYTES_PER_CARRIER
         + max(
-            batch_memory(scenario, min(runs, CHUNK_RUNS)), batch_memory(scenario, 1, record=record)
+            batch_memory(scenario, min(runs, CHUNK_RUNS), backend=backend),
+            batch_memory(scenario, 1, record=record, backend=backend),
         ),
         error=ConfigError,
     )
@@ -342,7 +354,14 @@ def simulate_cmd(
     if mcap is not None:
         require_rosbags()  # the missing extra is named before any work
     recorded = any(path is not None for path in drawn)
-    _check_work(scenario, len(policies), runs, run_offset, record=recorded)
+    _check_work(
+        scenario,
+        len(policies),
+        runs,
+        run_offset,
+        record=recorded,
+        backend=resolve_backend(backend, controller=controller),
+    )
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()
     show = sys.stderr.isatty() if progress is None else progress

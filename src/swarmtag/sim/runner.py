@@ -231,15 +231,34 @@ LOG_BYTES_PER_CARRIER: Final = 2200
 event rows (~1000 B) and the CSV text while writing (measured: docs/reliability.md)."""
 
 
-def batch_memory(scenario: Scenario, runs: int, *, record: bool = False) -> float:
+def batch_memory(
+    scenario: Scenario, runs: int, *, record: bool = False, backend: str = "reference"
+) -> float:
     """Estimated peak bytes of simulating ``runs`` runs of ``scenario`` in one batch.
 
-    Fitted to tracemalloc peaks (docs/reliability.md): the carrier-carrier
-    line-of-sight tests (~650 B per pair), the robot-robot broad phase
-    (~75-200 B per pair), robot-carrier distances, per-body state, the
-    advertisement delay buffer and, when recording, every tick's poses.
+    Reference: fitted to tracemalloc peaks (docs/reliability.md): the
+    carrier-carrier line-of-sight tests (~650 B per pair), the robot-robot
+    broad phase (~75-200 B per pair), robot-carrier distances, per-body
+    state, the advertisement delay buffer and, when recording, every tick's
+    poses. Fast: the state's robot-carrier arrays (42 B per pair) and the
+    kernel's (24 B, 48 more with advertisement loss or camera noise), the
+    start state's free-face test (~400 B per carrier pair), per-body state,
+    grids and event buffers (docs/performance.md measures it).
     """
     robots, carriers = scenario.robots, scenario.carriers
+    if backend == "fast":
+        realism = scenario.realism
+        pair = 66.0 + (48.0 if realism.advertisement_loss or realism.detection_noise else 0.0)
+        per_run = (
+            pair * robots * carriers
+            + 400.0 * carriers**2
+            + 1000.0 * robots
+            + 600.0 * carriers
+            + 24.0 * (realism.status_delay + 1) * carriers
+        )
+        if record:
+            per_run += 48.0 * scenario.run_ticks * (robots + carriers)
+        return runs * per_run
     per_run = (
         700.0 * carriers**2
         + 100.0 * robots**2
@@ -313,7 +332,7 @@ def simulate(
         threads = check_int("threads", threads, low=1, high=MAX_THREADS)
     check_memory(
         f"{runs} runs of {scenario.robots} robots and {scenario.carriers} carriers",
-        batch_memory(scenario, runs, record=record),
+        batch_memory(scenario, runs, record=record, backend=backend),
         error=ConfigError,
     )
     params = make_params(scenario, policy)
@@ -322,7 +341,7 @@ def simulate(
         from swarmtag.sim.fast import simulate_fast  # noqa: PLC0415 - numba is an extra
 
         final, events, breakdowns, recorder = simulate_fast(
-            state, params, seed=seed, record=record, check=check, threads=threads
+            state, params, seed=seed, record=record, check=check, threads=threads, adopt=True
         )
         return _result(
             final, params, seed=seed, events=events, breakdowns=breakdowns, recorder=recorder

@@ -78,15 +78,13 @@ def _taken(
     body = 2 * k.robot_radius
     count = k.robots
     if k.robot_grid:
-        size = k.grid_size
         count = near(
             r,
             px,
             py,
             body,
             k.grid_cell,
-            size,
-            size,
+            k.robot_bits,
             x.robot_start,
             x.robot_items,
             x.near_robots,

@@ -187,7 +187,6 @@ def _clear_of_obstacles(r: int, c: int, px: float, py: float, k: Constants, x: S
     """Whether a robot at ``(px, py)`` overlaps no obstacle carrier other than ``c``."""
     count = x.obstacle_count[r]
     if k.obstacle_grid:
-        size = k.grid_size
         reach = k.carrier_half + k.robot_radius
         count = near(
             r,
@@ -195,8 +194,7 @@ def _clear_of_obstacles(r: int, c: int, px: float, py: float, k: Constants, x: S
             py,
             reach,
             k.grid_cell,
-            size,
-            size,
+            k.carrier_bits,
             x.obstacle_start,
             x.obstacle_items,
             x.near_blockers,

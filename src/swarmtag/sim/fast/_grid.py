@@ -1,13 +1,19 @@
-"""Uniform grids (cell lists) for the compiled kernel: the nearby bodies, found in O(1).
+"""Spatial hashing for the compiled kernel: the nearby bodies, found in O(1), in O(n) memory.
 
-A grid covers ``[0, columns * cell) x [0, rows * cell)`` with square cells
-(coordinates outside go to the edge cells). ``fill`` sorts points into cells
-by counting sort: cell ``k`` holds ``items[start[k] : start[k + 1]]``, in
-ascending point order. ``near`` gathers, in ascending order, the points of
-every cell the square ``position +- reach`` touches. Sums over bodies must
-run in index order to match the reference bit for bit, so ``near`` returns
-its points sorted; the caller then tests each one exactly as the reference
-tests every pair, and a point the grid leaves out is one that test rejects.
+Space is cut into square cells of side ``cell``; a body at ``(x, y)`` is in
+cell ``(floor(x / cell), floor(y / cell))``, and cells are folded onto a
+table of ``2**bits`` by ``2**bits`` buckets (cell ``(ix, iy)`` goes to bucket
+``(ix mod 2**bits, iy mod 2**bits)``; about twice as many buckets as
+bodies), so that building and clearing cost O(bodies) however large the
+arena. ``fill`` sorts points into buckets by counting sort: bucket ``b``
+holds ``items[start[b] : start[b + 1]]``, in ascending point order. ``near``
+gathers the points of the buckets of the cells the square ``position +-
+reach`` touches: at most 3 by 3 cells (``reach <= cell``), which fall in 9
+different buckets (``2**bits >= 4``). A bucket may also hold points of far
+cells folded onto it: the caller tests every point it gets exactly as the
+reference tests every pair, so extra points change nothing, and a point
+left out is one that test rejects. Sums over bodies must run in index order
+to match the reference bit for bit, so ``near`` can return its points sorted.
 """
 
 from __future__ import annotations
@@ -18,14 +24,22 @@ import numpy as np
 
 from swarmtag.sim.fast._jit import inlined
 
-__all__ = ["fill", "near"]
+__all__ = ["fill", "near", "table_bits"]
+
+
+def table_bits(bodies: int) -> int:
+    """``bits`` of a table for ``bodies`` points: ``4**bits >= 2 * bodies``, at least 2."""
+    bits = 2
+    while 4**bits < 2 * bodies:
+        bits += 1
+    return bits
 
 
 @inlined
-def _cell(value: float, cell: float, size: int) -> int:
-    """The cell index of a coordinate, clamped to the grid."""
-    index = math.floor(value / cell)
-    return min(max(index, 0), size - 1)
+def _bucket(ix: int, iy: int, bits: int) -> int:
+    """The bucket of cell ``(ix, iy)``: both folded onto ``2**bits``."""
+    fold = (1 << bits) - 1
+    return (ix & fold) | ((iy & fold) << bits)
 
 
 @inlined
@@ -35,24 +49,29 @@ def fill(
     ys: np.ndarray,
     count: int,
     cell: float,
-    columns: int,
-    rows: int,
+    bits: int,
     start: np.ndarray,
     items: np.ndarray,
+    keys: np.ndarray,
 ) -> None:
-    """Sort points ``(xs[r, i], ys[r, i])``, ``i < count``, into run ``r``'s ``start``/``items``."""
-    cells = columns * rows
-    for k in range(cells + 1):
-        start[r, k] = 0
+    """Sort points ``(xs[r, i], ys[r, i])``, ``i < count``, into run ``r``'s ``start``/``items``.
+
+    ``keys[r, :count]`` is working space (each point's bucket).
+    """
+    buckets = 1 << (2 * bits)
+    for b in range(buckets + 1):
+        start[r, b] = 0
     for i in range(count):
-        start[r, _cell(xs[r, i], cell, columns) * rows + _cell(ys[r, i], cell, rows)] += 1
-    for k in range(1, cells):  # inclusive prefix sums: the end of each cell
-        start[r, k] += start[r, k - 1]
-    start[r, cells] = count
-    for i in range(count - 1, -1, -1):  # backwards: each cell ends up in ascending order
-        k = _cell(xs[r, i], cell, columns) * rows + _cell(ys[r, i], cell, rows)
-        start[r, k] -= 1
-        items[r, start[r, k]] = i
+        b = _bucket(math.floor(xs[r, i] / cell), math.floor(ys[r, i] / cell), bits)
+        keys[r, i] = b
+        start[r, b] += 1
+    for b in range(1, buckets):  # inclusive prefix sums: the end of each bucket
+        start[r, b] += start[r, b - 1]
+    start[r, buckets] = count
+    for i in range(count - 1, -1, -1):  # backwards: each bucket ends up in ascending order
+        b = keys[r, i]
+        start[r, b] -= 1
+        items[r, start[r, b]] = i
 
 
 @inlined
@@ -62,27 +81,27 @@ def near(
     y: float,
     reach: float,
     cell: float,
-    columns: int,
-    rows: int,
+    bits: int,
     start: np.ndarray,
     items: np.ndarray,
     out: np.ndarray,
     ordered: bool,
 ) -> int:
-    """Points of run ``r`` in the cells within ``reach`` of ``(x, y)`` into ``out[r]``.
+    """Points of run ``r`` in the buckets of the cells within ``reach <= cell`` of ``(x, y)``.
 
-    ``ordered``: ascending (sums over bodies), else in cell order (tests whose
-    answer does not depend on the order).
+    Writes them to ``out[r]`` and returns how many: ascending when
+    ``ordered`` (sums over bodies), else in bucket order (tests whose answer
+    does not depend on the order).
     """
     found = 0
-    low_x = _cell(x - reach, cell, columns)
-    high_x = _cell(x + reach, cell, columns)
-    low_y = _cell(y - reach, cell, rows)
-    high_y = _cell(y + reach, cell, rows)
+    low_x = math.floor((x - reach) / cell)
+    high_x = math.floor((x + reach) / cell)
+    low_y = math.floor((y - reach) / cell)
+    high_y = math.floor((y + reach) / cell)
     for gx in range(low_x, high_x + 1):
         for gy in range(low_y, high_y + 1):
-            k = gx * rows + gy
-            for slot in range(start[r, k], start[r, k + 1]):
+            b = _bucket(gx, gy, bits)
+            for slot in range(start[r, b], start[r, b + 1]):
                 item = items[r, slot]
                 position = found
                 if ordered:  # insertion sort: the lists are short

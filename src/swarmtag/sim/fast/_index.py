@@ -44,29 +44,27 @@ def index_obstacles(r: int, w: World, k: Constants, x: Scratch) -> None:
     x.obstacle_box[r, 2] = low_y
     x.obstacle_box[r, 3] = high_y
     if k.obstacle_grid:
-        size = k.grid_size
         fill(
             r,
             x.obstacle_x,
             x.obstacle_y,
             count,
             k.grid_cell,
-            size,
-            size,
+            k.carrier_bits,
             x.obstacle_start,
             x.obstacle_items,
+            x.carrier_keys,
         )
-        size = k.sight_size
         fill(
             r,
             x.obstacle_x,
             x.obstacle_y,
             count,
             k.sight_cell,
-            size,
-            size,
+            k.carrier_bits,
             x.sight_start,
             x.sight_items,
+            x.carrier_keys,
         )
 
 
@@ -78,7 +76,27 @@ def index_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
     for n in range(k.robots):
         x.x[r, n] = w.robot_pos[r, n, 0]
         x.y[r, n] = w.robot_pos[r, n, 1]
-    size = k.grid_size
-    fill(r, x.x, x.y, k.robots, k.grid_cell, size, size, x.robot_start, x.robot_items)
-    size = k.sight_size
-    fill(r, x.x, x.y, k.robots, k.sight_cell, size, size, x.crowd_start, x.crowd_items)
+    if k.avoid_taken_faces:  # robots standing on predock points
+        fill(
+            r,
+            x.x,
+            x.y,
+            k.robots,
+            k.grid_cell,
+            k.robot_bits,
+            x.robot_start,
+            x.robot_items,
+            x.robot_keys,
+        )
+    if k.occlusion >= 2:  # robots hiding carriers
+        fill(
+            r,
+            x.x,
+            x.y,
+            k.robots,
+            k.sight_cell,
+            k.robot_bits,
+            x.crowd_start,
+            x.crowd_items,
+            x.robot_keys,
+        )

@@ -17,6 +17,7 @@ from typing import Final, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag.sim.fast._grid import table_bits
 from swarmtag.sim.params import Params
 from swarmtag.sim.state import WorldState
 
@@ -135,16 +136,16 @@ class Constants(NamedTuple):
     policy_parameter: float
     grid_cell: float
     """Side of a grid cell: the longest reach of a collision (two loaded robots, ...)."""
-    grid_size: int
-    """Cells along each side of the (square) arena's grid."""
+    robot_bits: int
+    """The robots' grid tables have ``2**bits`` by ``2**bits`` buckets (``_grid.table_bits``)."""
+    carrier_bits: int
+    """The same for the carriers' grid tables."""
     obstacle_grid: bool
     """Find each robot's obstacle carriers with the grid (many carriers) rather than a scan."""
     robot_grid: bool
     """Find each robot's neighbours with the grid (many robots) rather than a scan."""
     sight_cell: float
     """Side of a coarse grid cell: the camera's range (at least ``grid_cell``)."""
-    sight_size: int
-    """Coarse cells along each side of the arena's grid."""
 
 
 class Scratch(NamedTuple):
@@ -194,23 +195,38 @@ class Scratch(NamedTuple):
     """(R, 4) the smallest and largest x, then y, of the obstacles' centres."""
     obstacle_y: F8
     obstacle_start: I8
-    """(R, cells + 1) the obstacles' grid (``_grid``): where each cell's list starts."""
+    """(R, buckets + 1) the obstacles' grid (``_grid``): where each bucket's list starts."""
     obstacle_items: I8
-    """(R, C) the obstacles' grid: positions in ``obstacles``, cell by cell."""
+    """(R, C) the obstacles' grid: positions in ``obstacles``, bucket by bucket."""
     robot_start: I8
-    """(R, cells + 1) the robots' grid: at the tick's start, then of each collision pass."""
+    """(R, buckets + 1) the robots' grid: at the tick's start, then of each collision pass."""
     robot_items: I8
-    """(R, N) the robots' grid: robot ids, cell by cell."""
+    """(R, N) the robots' grid: robot ids, bucket by bucket."""
     sight_start: I8
-    """(R, sight cells + 1) the obstacles' coarse grid (cells as wide as the camera's range)."""
+    """(R, buckets + 1) the obstacles' coarse grid (cells as wide as the camera's range)."""
     sight_items: I8
-    """(R, C) the obstacles' coarse grid: positions in ``obstacles``, cell by cell."""
+    """(R, C) the obstacles' coarse grid: positions in ``obstacles``, bucket by bucket."""
     crowd_start: I8
-    """(R, sight cells + 1) the robots' coarse grid at the tick's start (robots hide carriers)."""
+    """(R, buckets + 1) the robots' coarse grid at the tick's start (robots hide carriers)."""
     crowd_items: I8
-    """(R, N) the robots' coarse grid: robot ids, cell by cell."""
+    """(R, N) the robots' coarse grid: robot ids, bucket by bucket."""
+    robot_keys: I8
+    """(R, N) working space of a robot grid's ``fill``."""
+    carrier_keys: I8
+    """(R, C) working space of an obstacle grid's ``fill``."""
     gathered: I8
     """(R, max(N, C)) bodies a grid query found, ascending (collisions)."""
+    active: I8
+    """(R, N) the robots a collision pass computes (large swarms: those near a move)."""
+    movers: I8
+    """(R, N) the robots the last collision pass moved ..."""
+    mover_x: F8
+    """(R, N) ... and where each of them stood before it."""
+    mover_y: F8
+    collision_mark: I8
+    """(R, N) the last ``stamp`` that put each robot on the ``active`` list."""
+    stamp: I8
+    """(R,) a counter for ``collision_mark``."""
     near_carriers: I8
     """(R, C) carriers a camera query found (any order)."""
     near_blockers: I8
@@ -283,18 +299,20 @@ def constants_of(params: Params) -> Constants:
         policy_kind=kind,
         policy_parameter=parameter,
         grid_cell=cell,
-        grid_size=int(params.arena / cell) + 1,
+        robot_bits=table_bits(params.robots),
+        carrier_bits=table_bits(params.carriers),
         obstacle_grid=params.carriers > GRID_FROM,
         robot_grid=params.robots > GRID_FROM,
         sight_cell=sight,
-        sight_size=int(params.arena / sight) + 1,
     )
 
 
-def world_of(state: WorldState) -> World:
-    """The kernel's view of a copy of ``state``: every run at ``state.tick``."""
-    copy = state.copy()
-    arrays = {f.name: getattr(copy, f.name) for f in fields(WorldState) if f.name in World._fields}
+def world_of(state: WorldState, *, copy: bool = True) -> World:
+    """The kernel's view of ``state`` (a copy unless ``copy`` is false): every run at its tick."""
+    source = state.copy() if copy else state
+    arrays = {
+        f.name: getattr(source, f.name) for f in fields(WorldState) if f.name in World._fields
+    }
     return World(run_tick=np.full(state.runs, state.tick, dtype=np.int64), **arrays)
 
 
@@ -305,13 +323,13 @@ def state_of(world: World, template: WorldState) -> WorldState:
     return replace(template, tick=tick, **arrays)
 
 
-def scratch_for(
-    runs: int, robots: int, carriers: int, capacity: int, cells: int, sight_cells: int
-) -> Scratch:
-    """Working space for ``runs`` runs: event buffers of ``capacity`` rows, grids.
+def scratch_for(runs: int, robots: int, carriers: int, capacity: int, gridded: bool) -> Scratch:
+    """Working space for ``runs`` runs: event buffers of ``capacity`` rows, hash tables.
 
-    The grids have ``cells`` cells (collisions) and ``sight_cells`` (perception).
+    The tables (``_grid``) get their full size only where a grid is used (``gridded``).
     """
+    robot_buckets = 4 ** table_bits(robots) + 1 if gridded else 1
+    carrier_buckets = 4 ** table_bits(carriers) + 1 if gridded else 1
     n, c = (runs, robots), (runs, carriers)
     nc = (runs, robots, carriers)
 
@@ -354,15 +372,23 @@ def scratch_for(
         obstacle_x=floats(*c),
         obstacle_box=floats(runs, 4),
         obstacle_y=floats(*c),
-        obstacle_start=np.zeros((runs, cells + 1), dtype=np.int64),
+        obstacle_start=np.zeros((runs, carrier_buckets), dtype=np.int64),
         obstacle_items=np.zeros(c, dtype=np.int64),
-        robot_start=np.zeros((runs, cells + 1), dtype=np.int64),
+        robot_start=np.zeros((runs, robot_buckets), dtype=np.int64),
         robot_items=np.zeros(n, dtype=np.int64),
-        sight_start=np.zeros((runs, sight_cells + 1), dtype=np.int64),
+        sight_start=np.zeros((runs, carrier_buckets), dtype=np.int64),
         sight_items=np.zeros(c, dtype=np.int64),
-        crowd_start=np.zeros((runs, sight_cells + 1), dtype=np.int64),
+        crowd_start=np.zeros((runs, robot_buckets), dtype=np.int64),
         crowd_items=np.zeros(n, dtype=np.int64),
+        robot_keys=np.zeros(n, dtype=np.int64),
+        carrier_keys=np.zeros(c, dtype=np.int64),
         gathered=np.zeros((runs, max(robots, carriers)), dtype=np.int64),
+        active=np.zeros(n, dtype=np.int64),
+        movers=np.zeros(n, dtype=np.int64),
+        mover_x=floats(*n),
+        mover_y=floats(*n),
+        collision_mark=np.full(n, -1, dtype=np.int64),
+        stamp=np.zeros(runs, dtype=np.int64),
         near_carriers=np.zeros(c, dtype=np.int64),
         near_blockers=np.zeros(c, dtype=np.int64),
         near_robots=np.zeros(n, dtype=np.int64),

@@ -184,15 +184,18 @@ def _obstacle_sums(
 
 
 @inlined
-def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
-    """One Jacobi pass from ``x.x, x.y`` into ``x.new_x, x.new_y``; whether anyone moved."""
-    moved = False
+def _collision_pass(r: int, count: int, w: World, k: Constants, x: Scratch) -> int:
+    """One Jacobi pass for the robots ``x.active[r, :count]`` (all of them without a grid).
+
+    Reads the positions at the pass's start (``x.x``, ``x.y``), writes the
+    robots' new ones there afterwards, and lists those that moved (and where
+    they stood) in ``x.movers``; returns how many did.
+    """
     half = k.carrier_half
-    size = k.grid_size
     cell = k.grid_cell
-    if k.robot_grid:
-        fill(r, x.x, x.y, k.robots, cell, size, size, x.robot_start, x.robot_items)
-    for n in range(k.robots):
+    movers = 0
+    for j in range(count):
+        n = x.active[r, j] if k.robot_grid else j
         xn = x.x[r, n]
         yn = x.y[r, n]
         extent = x.extent[r, n]
@@ -203,41 +206,39 @@ def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
         carrier_y = 0.0
         if x.movable[r, n]:
             if k.robot_grid:
-                count = near(
+                found = near(
                     r,
                     xn,
                     yn,
                     cell,
                     cell,
-                    size,
-                    size,
+                    k.robot_bits,
                     x.robot_start,
                     x.robot_items,
                     x.gathered,
                     True,
                 )
-                robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, count, True, x)
+                robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, found, True, x)
             else:
                 robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, k.robots, False, x)
             reach = (extent + half) + radius
             if _beyond_obstacles(r, xn, yn, reach, x):
                 pass
             elif k.obstacle_grid:
-                count = near(
+                found = near(
                     r,
                     xn,
                     yn,
                     reach,
                     cell,
-                    size,
-                    size,
+                    k.carrier_bits,
                     x.obstacle_start,
                     x.obstacle_items,
                     x.gathered,
                     True,
                 )
                 carrier_x, carrier_y = _obstacle_sums(
-                    r, n, xn, yn, x.gathered, count, True, w, k, x
+                    r, n, xn, yn, x.gathered, found, True, w, k, x
                 )
             else:
                 carrier_x, carrier_y = _obstacle_sums(
@@ -245,29 +246,92 @@ def _collision_pass(r: int, w: World, k: Constants, x: Scratch) -> bool:
                 )
         margin = extent + radius
         high = k.arena - margin
-        new_x = minimum(maximum((xn + robot_x) + carrier_x, margin), high)
-        new_y = minimum(maximum((yn + robot_y) + carrier_y, margin), high)
-        x.new_x[r, n] = new_x
-        x.new_y[r, n] = new_y
-        if new_x != xn or new_y != yn:
-            moved = True
-    return moved
+        x.new_x[r, n] = minimum(maximum((xn + robot_x) + carrier_x, margin), high)
+        x.new_y[r, n] = minimum(maximum((yn + robot_y) + carrier_y, margin), high)
+    for j in range(count):  # Jacobi: every new position from the pass's start
+        n = x.active[r, j] if k.robot_grid else j
+        if x.new_x[r, n] != x.x[r, n] or x.new_y[r, n] != x.y[r, n]:
+            x.movers[r, movers] = n
+            x.mover_x[r, movers] = x.x[r, n]
+            x.mover_y[r, movers] = x.y[r, n]
+            movers += 1
+            x.x[r, n] = x.new_x[r, n]
+            x.y[r, n] = x.new_y[r, n]
+    return movers
+
+
+@inlined
+def _next_active(r: int, movers: int, k: Constants, x: Scratch) -> int:
+    """The robots the next pass must compute: within a cell of where a mover was or is.
+
+    A robot none of whose neighbours (within the longest reach of a pair)
+    moved, and which did not move itself, would compute exactly its current
+    position again: leaving it out changes nothing. Returns how many.
+    """
+    cell = k.grid_cell
+    fill(r, x.x, x.y, k.robots, cell, k.robot_bits, x.robot_start, x.robot_items, x.robot_keys)
+    x.stamp[r] += 1
+    stamp = x.stamp[r]
+    count = 0
+    for i in range(movers):
+        for side in range(2):
+            px = x.mover_x[r, i] if side == 0 else x.x[r, x.movers[r, i]]
+            py = x.mover_y[r, i] if side == 0 else x.y[r, x.movers[r, i]]
+            found = near(
+                r,
+                px,
+                py,
+                cell,
+                cell,
+                k.robot_bits,
+                x.robot_start,
+                x.robot_items,
+                x.near_robots,
+                False,
+            )
+            for j in range(found):
+                m = x.near_robots[r, j]
+                if x.collision_mark[r, m] != stamp:
+                    x.collision_mark[r, m] = stamp
+                    x.active[r, count] = m
+                    count += 1
+    return count
 
 
 @inlined
 def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
-    """Resolve collisions of the proposed positions of run ``r`` (``motion.resolve``)."""
+    """Resolve collisions of the proposed positions of run ``r`` (``motion.resolve``).
+
+    A pass that moves nobody is a fixed point: the run's remaining passes
+    would change nothing. With a grid (large swarms) a pass after the first
+    computes only the robots near a robot the pass before moved.
+    """
     _bodies(r, w, k, x)
     for n in range(k.robots):
         x.x[r, n] = x.proposed[r, n, 0]
         x.y[r, n] = x.proposed[r, n, 1]
-    for _ in range(k.collision_iterations):
-        moved = _collision_pass(r, w, k, x)
-        for n in range(k.robots):
-            x.x[r, n] = x.new_x[r, n]
-            x.y[r, n] = x.new_y[r, n]
-        if not moved:
+        x.active[r, n] = n
+    count = k.robots
+    if k.robot_grid:
+        fill(
+            r,
+            x.x,
+            x.y,
+            k.robots,
+            k.grid_cell,
+            k.robot_bits,
+            x.robot_start,
+            x.robot_items,
+            x.robot_keys,
+        )
+        for j in range(k.robots):  # bucket by bucket: neighbours' buckets stay in cache
+            x.active[r, j] = x.robot_items[r, j]
+    for it in range(k.collision_iterations):
+        movers = _collision_pass(r, count, w, k, x)
+        if movers == 0:
             break
+        if k.robot_grid and it + 1 < k.collision_iterations:
+            count = _next_active(r, movers, k, x)
     for n in range(k.robots):
         w.contact[r, n, 0] = x.x[r, n] - x.proposed[r, n, 0]
         w.contact[r, n, 1] = x.y[r, n] - x.proposed[r, n, 1]

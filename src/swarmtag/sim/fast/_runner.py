@@ -160,11 +160,13 @@ def _raise_failure(x: Scratch, world: World) -> None:
 class _Batch:
     """One seeded batch in the compiled kernel: its arrays, streams, events and threads."""
 
-    def __init__(self, state: WorldState, params: Params, seed: int, threads: int) -> None:
+    def __init__(
+        self, state: WorldState, params: Params, seed: int, threads: int, *, adopt: bool
+    ) -> None:
         runs, robots = state.runs, params.robots
         self.template = state
         self.params = params
-        self.world = world_of(state)
+        self.world = world_of(state, copy=not adopt)
         self.constants = constants_of(params)
         k = self.constants
         gridded = k.obstacle_grid or k.robot_grid
@@ -173,8 +175,7 @@ class _Batch:
             robots,
             params.carriers,
             capacity=_capacity(robots),
-            cells=k.grid_size**2 if gridded else 1,
-            sight_cells=k.sight_size**2 if gridded else 1,
+            gridded=gridded,
         )
         self.streams = _Streams(params, seed, [int(run) for run in state.run_ids])
         self.events = EventRecorder()
@@ -260,16 +261,21 @@ def simulate_fast(
     record: bool = False,
     check: bool = False,
     threads: int | None = None,
+    adopt: bool = False,
 ) -> tuple[WorldState, EventRecorder, np.ndarray, TrajectoryRecorder | None]:
     """Run the seeded batch ``state`` with the compiled kernel on ``threads`` threads.
 
     Returns the final state, the events, the breakdowns per run and, with
     ``record``, the trajectories recorded tick by tick (as ``run_batch``).
+    ``adopt``: step ``state``'s own arrays instead of a copy (the caller
+    gives it up; large swarms need the memory).
     """
     seed = check_seed(seed)
     start = state.tick
     end = params.run_ticks if ticks is None else start + ticks
-    batch = _Batch(state, params, seed, default_threads() if threads is None else threads)
+    batch = _Batch(
+        state, params, seed, default_threads() if threads is None else threads, adopt=adopt
+    )
     trajectories = TrajectoryRecorder(state, end - start) if record else None
     write_ticks = sorted({w.tick for w in params.scenario.reprioritisations})
     stepwise = record or check

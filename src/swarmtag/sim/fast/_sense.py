@@ -82,15 +82,13 @@ def _hidden_by_carriers(r: int, n: int, c: int, w: World, k: Constants, x: Scrat
     ex = w.carrier_pos[r, c, 0]
     ey = w.carrier_pos[r, c, 1]
     reach = max(abs(ex - sx), abs(ey - sy)) * 0.5 + k.carrier_half
-    size = k.sight_size
     count = near(
         r,
         (sx + ex) * 0.5,
         (sy + ey) * 0.5,
         reach,
         k.sight_cell,
-        size,
-        size,
+        k.carrier_bits,
         x.sight_start,
         x.sight_items,
         x.near_blockers,
@@ -114,15 +112,13 @@ def _hidden_by_robots(r: int, n: int, c: int, w: World, k: Constants, x: Scratch
     count = k.robots
     if k.robot_grid:
         reach = max(abs(ex - sx), abs(ey - sy)) * 0.5 + k.robot_radius
-        size = k.sight_size
         count = near(
             r,
             (sx + ex) * 0.5,
             (sy + ey) * 0.5,
             reach,
             k.sight_cell,
-            size,
-            size,
+            k.robot_bits,
             x.crowd_start,
             x.crowd_items,
             x.near_robots,
@@ -232,15 +228,13 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
             continue
         count = x.obstacle_count[r]
         if k.obstacle_grid:
-            size = k.sight_size
             count = near(
                 r,
                 rx,
                 ry,
                 k.camera_range,
                 k.sight_cell,
-                size,
-                size,
+                k.carrier_bits,
                 x.sight_start,
                 x.sight_items,
                 x.near_carriers,
