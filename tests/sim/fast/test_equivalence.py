@@ -151,3 +151,22 @@ def scenarios(draw: st.DrawFn) -> Scenario:
 @given(scenario=scenarios(), policy=st.sampled_from(POLICIES), seed=st.integers(0, 2**32))
 def test_random_scenarios_agree(scenario, policy, seed):
     compare(scenario, policy, seed=seed, runs=2)
+
+
+LARGE = replace(Scenario.default(120, 128), ticks=200)
+"""Beyond ``_layout.GRID_FROM`` robots and carriers: every grid path of the compiled kernel."""
+
+
+@pytest.mark.parametrize(
+    "scenario",
+    [
+        LARGE,
+        replace(LARGE, camera=Camera(range=3.6, occlusion="carriers+robots")),
+        replace(LARGE, camera=Camera(range=0.3, occlusion="carriers+robots", memory=2.0)),
+        replace(LARGE, perception="disc", detection_radius=2.0),
+        replace(LARGE, realism=Realism(advertisement_loss=0.2, detection_noise=0.02)),
+    ],
+    ids=["grids", "robots-occlude", "memory", "disc", "realism"],
+)
+def test_large_swarms_agree(scenario):
+    compare(scenario, Urgency(alpha=3.0), seed=21, runs=2)
