@@ -225,3 +225,27 @@ def test_an_unknown_backend_is_one_line(capsys):
     assert code == 2
     assert "--backend" in err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_a_first_compilation_is_announced_on_stderr(capsys, monkeypatch):
+    from swarmtag.sim import fast
+
+    monkeypatch.setattr(fast, "kernel_compiled", lambda: False)
+    code, out, err = run(capsys, *SMALL, "--runs", "1", "--json")
+    assert code == 0
+    assert "compiling the fast simulation kernel" in err
+    json.loads(out)  # stdout stays the JSON alone
+    monkeypatch.setattr(fast, "kernel_compiled", lambda: True)
+    code, _, err = run(capsys, *SMALL, "--runs", "1", "--json")
+    assert "compiling" not in err
+    code, _, err = run(capsys, *SMALL, "--runs", "1", "--json", "--backend", "reference")
+    assert "compiling" not in err
+
+
+def test_the_kernel_knows_it_is_compiled():
+    from swarmtag.sim.fast import kernel_compiled
+
+    run_once = ["simulate", *SMALL, "--runs", "1", "--json", "--backend", "fast"]
+    with pytest.raises(SystemExit):
+        main(run_once)
+    assert kernel_compiled()

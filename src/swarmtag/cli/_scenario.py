@@ -22,7 +22,14 @@ from swarmtag.sim.profiles import DEFAULT_PROFILE, load_profile
 from swarmtag.sim.runner import BACKENDS
 from swarmtag.sim.sensors import OCCLUSION_MODELS, PERCEPTION_MODELS
 
-__all__ = ["SCENARIO_FLAGS", "backend_option", "build_scenario", "parse_set", "scenario_options"]
+__all__ = [
+    "SCENARIO_FLAGS",
+    "backend_option",
+    "build_scenario",
+    "note_compilation",
+    "parse_set",
+    "scenario_options",
+]
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -49,6 +56,20 @@ backend_option = click.option(
     help="Simulation backend: the numpy reference kernel, or the compiled kernel (numba, the "
     "fast extra; the same results) [default: fast where numba is installed].",
 )
+
+
+def note_compilation(backend: str) -> None:
+    """Say on stderr that the fast kernel is about to be compiled (once per machine)."""
+    if backend != "fast":
+        return
+    from swarmtag.sim.fast import kernel_compiled  # noqa: PLC0415 - numba is an extra
+
+    if not kernel_compiled():
+        click.echo(
+            "swarmtag: compiling the fast simulation kernel for this machine "
+            "(once: about a minute or two; later runs load it)",
+            err=True,
+        )
 
 
 def parse_set(text: str) -> tuple[str, Any]:

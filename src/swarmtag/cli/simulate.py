@@ -17,7 +17,12 @@ from swarmtag._outputs import OutputPlan, Stage
 from swarmtag._resources import check_memory
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
-from swarmtag.cli._scenario import backend_option, build_scenario, scenario_options
+from swarmtag.cli._scenario import (
+    backend_option,
+    build_scenario,
+    note_compilation,
+    scenario_options,
+)
 from swarmtag.cli.metrics import render_choices, render_report, summarize_with_choices
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
@@ -354,17 +359,12 @@ def simulate_cmd(
     if mcap is not None:
         require_rosbags()  # the missing extra is named before any work
     recorded = any(path is not None for path in drawn)
-    _check_work(
-        scenario,
-        len(policies),
-        runs,
-        run_offset,
-        record=recorded,
-        backend=resolve_backend(backend, controller=controller),
-    )
+    resolved = resolve_backend(backend, controller=controller)
+    _check_work(scenario, len(policies), runs, run_offset, record=recorded, backend=resolved)
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()
     show = sys.stderr.isatty() if progress is None else progress
+    note_compilation(resolved)
     with plan.writing() as stage:
         log, table = run_conditions(
             scenario,

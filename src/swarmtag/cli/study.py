@@ -12,8 +12,9 @@ import click
 
 from swarmtag._checks import MAX_RESAMPLES, MAX_WORKERS
 from swarmtag._inputs import check_path
-from swarmtag.cli._scenario import backend_option
-from swarmtag.errors import StudyError
+from swarmtag.cli._scenario import backend_option, note_compilation
+from swarmtag.errors import ConfigError, StudyError
+from swarmtag.sim.runner import resolve_backend
 
 __all__ = ["reproduce", "study"]
 
@@ -74,6 +75,7 @@ def run_cmd(
 
     spec = load_study(source)
     show = sys.stderr.isatty() if progress is None else progress
+    _note(backend if backend is not None else spec.backend, scheduler)
     result = run_study(
         spec,
         out_dir=out_dir,
@@ -90,6 +92,16 @@ def run_cmd(
     click.echo(f"results store: {result.store}")
     for scale, path in result.metrics_paths.items():
         click.echo(f"metrics ({scale}): {path}")
+
+
+def _note(backend: str | None, scheduler: str | None) -> None:
+    """Say so before the fast kernel is compiled in this process (not on a cluster)."""
+    if scheduler is None:
+        try:
+            resolved = resolve_backend(backend)
+        except ConfigError as error:
+            raise StudyError(str(error)) from None
+        note_compilation(resolved)
 
 
 def _studies(sources: Sequence[str], out_dir: Path | None) -> list[Any]:
@@ -184,6 +196,7 @@ def reproduce(
 
     studies = _studies(sources, None)
     show = sys.stderr.isatty() if progress is None else progress
+    _note(backend, scheduler)
     started = time.perf_counter()
     results = []
     for spec in studies:

@@ -10,7 +10,7 @@ through ``swarmtag.sim.simulate(..., backend="fast")`` or after checking
 
 from __future__ import annotations
 
-from swarmtag.sim.fast._runner import simulate_fast
+from swarmtag.sim.fast._runner import kernel_compiled, simulate_fast
 from swarmtag.sim.fast._scene import seeded_scenes
 
-__all__ = ["seeded_scenes", "simulate_fast"]
+__all__ = ["kernel_compiled", "seeded_scenes", "simulate_fast"]

@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 from numba.typed import List
@@ -44,13 +44,26 @@ from swarmtag.sim.state import WorldState
 from swarmtag.sim.trajectories import TrajectoryRecorder
 from swarmtag.sim.wms import operator_writes
 
-__all__ = ["default_threads", "simulate_fast"]
+__all__ = ["default_threads", "kernel_compiled", "simulate_fast"]
 
 _WORK_PER_CALL: Final = 2_000_000
 """Robot-ticks per kernel call at most (about 0.1-0.2 s): bounds Ctrl-C latency and turn blocks."""
 _MAX_TICKS_PER_CALL: Final = 4096
 _GROUPS_PER_THREAD: Final = 4
 """Runs go to the threads in this many groups per thread (runs end at different ticks)."""
+
+
+def kernel_compiled() -> bool:
+    """Whether this machine has the kernel's machine code cached (else the next run compiles).
+
+    Reads numba's cache index of the kernel's entry point (its stamp must
+    match the source); if that cannot be read, says True (no warning).
+    """
+    try:
+        cache: Any = getattr(advance, "_cache", None)
+        return bool(cache._cache_file._load_index())
+    except Exception:  # noqa: BLE001 - numba's cache internals: any failure means "unknown"
+        return True
 
 
 def _capacity(robots: int) -> int:
