@@ -71,24 +71,35 @@ def _pursuit_checks(s: WorldState, params: Params, t: int, events: TickEvents) -
     to_walk(s, abandon | timeout)
 
 
-def _taken(s: WorldState, centre: Float, params: Params) -> NDArray[np.bool_]:
-    """(R, N, 4): the predock points of each robot's carrier it sees another robot stand on."""
+def _taken(
+    s: WorldState, centre: Float, params: Params, asking: NDArray[np.bool_]
+) -> NDArray[np.bool_]:
+    """(R, N, 4): the predock points of each robot's carrier it sees another robot stand on.
+
+    Only for the robots ``asking`` (those whose answer is used); False for the others.
+    """
     return taken_faces(
         s.robot_pos,
         centre,
         params.predock_offset,
         body=2 * params.robot_radius,
         sight=params.detection_radius,
+        asking=asking,
     )
 
 
-def _face(s: WorldState, carrier: Int, free: NDArray[np.bool_], params: Params) -> Int:
-    """The face each robot docks at on ``carrier`` (R, N): nearest free, avoiding taken ones."""
+def _face(
+    s: WorldState, carrier: Int, free: NDArray[np.bool_], params: Params, chosen: NDArray[np.bool_]
+) -> Int:
+    """The face each robot docks at on ``carrier`` (R, N): nearest free, avoiding taken ones.
+
+    Only the faces of the robots in ``chosen`` (they chose a carrier) are meaningful.
+    """
     centre = at_robots(s.carrier_pos, carrier)
     face = nearest_free_face(s.robot_pos, centre, free, params.predock_offset)
     if not params.avoid_taken_faces:
         return face
-    taken = _taken(s, centre, params)
+    taken = _taken(s, centre, params, chosen)
     open_face = nearest_free_face(s.robot_pos, centre, free & ~taken, params.predock_offset)
     return np.where(open_face >= 0, open_face, face)
 
@@ -99,7 +110,7 @@ def _switch_taken_faces(s: WorldState, params: Params) -> None:
     if not (params.avoid_taken_faces and approaching.any()):
         return
     centre = at_robots(s.carrier_pos, s.target)
-    taken = _taken(s, centre, params)
+    taken = _taken(s, centre, params, approaching)
     rows, robots = grid(*s.mode.shape)
     mine = taken[rows, robots, np.maximum(s.face, 0)]
     switch = approaching & mine
@@ -140,7 +151,7 @@ def _selection(
     ).astype(np.int64)
     chosen = choice >= 0
     rows, robots = grid(*choice.shape)
-    face = _face(s, choice, at_robots(s.free_face, choice), params)
+    face = _face(s, choice, at_robots(s.free_face, choice), params, chosen)
     heard = s.known_urgency[rows, robots, np.maximum(choice, 0)].astype(np.float64)
     events.add(EventKind.SELECT, chosen, choice, heard)
     events.add(EventKind.CANDIDATES, chosen, choice, available.sum(axis=-1).astype(np.float64))

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.sim._index import at_robots, in_modes, to_walk
+from swarmtag.sim.broad_phase import first_claims
 from swarmtag.sim.control import Arrivals, Carrying, LiftAnswers
 from swarmtag.sim.geometry import FACE_NORMALS, length
 from swarmtag.sim.params import Params
@@ -53,17 +54,14 @@ def _dock_free(s: WorldState, arriving: NDArray[np.bool_]) -> NDArray[np.bool_]:
     already there with its range sensors and waits (it abandons when it hears
     the lift, or times out).
     """
-    runs, robots = s.mode.shape
+    runs = s.mode.shape[0]
     target = np.maximum(s.target, 0)
     inside = in_modes(s.mode, _DOCK_TAKEN)
     taken = np.zeros((runs, s.carrier_pos.shape[1]), dtype=bool)
     rows, ids = np.nonzero(inside)
     taken[rows, target[rows, ids]] = True
     free = arriving & ~taken[np.arange(runs)[:, None], target]
-    same = free[:, :, None] & free[:, None, :] & (target[:, :, None] == target[:, None, :])
-    smaller = np.tri(robots, k=-1, dtype=bool)  # [i, j]: j < i
-    first: NDArray[np.bool_] = free & ~(same & smaller).any(axis=2)
-    return first
+    return first_claims(free, target, s.carrier_pos.shape[1])
 
 
 def arrive(before: WorldState, s: WorldState, *, params: Params, t: int) -> Arrivals:

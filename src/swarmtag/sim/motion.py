@@ -21,6 +21,10 @@ obstacles, except the one a robot is under (docking or driving out). A
 loaded robot's body is its carrier's square. Pushing out along the contact
 normal keeps the tangential part of the move: robots slide along what they
 touch.
+
+The pairs that touch are found with dense all-pairs arrays in small swarms
+and with uniform grids in large ones (``swarmtag.sim.broad_phase``); both
+give the same pairs in the same order, so the same sums.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.sim._index import STILL_MODES, at_robots, in_modes, is_loaded
+from swarmtag.sim.broad_phase import Grid, build_grid, grid_pays, near_points, sorted_pairs
 from swarmtag.sim.geometry import (
     FACE_NORMALS,
     Float,
@@ -102,48 +107,77 @@ def move(s: WorldState, params: Params) -> Float:
 
 @dataclass(frozen=True, eq=False)
 class _Bodies:
-    """What one tick's collision passes need, computed once per tick."""
+    """What one tick's collision passes need, computed once per tick.
 
-    pair_extent: Float
-    pair_radius: Float
-    share: Float
-    """(R, N, N) fraction of a robot-robot push that robot i takes."""
-    tie: Float
-    obstacle: NDArray[np.bool_]
-    """(R, N, C) carriers that block each robot."""
+    Pairs come from dense (R, N, N) and (R, N, C) arrays for small swarms
+    (``reach`` and ``allowed``, ``blocks``) or from uniform grids
+    (``swarmtag.sim.broad_phase``: robots binned every pass, obstacle
+    carriers once per tick in ``blocks``); both give the same pairs.
+    """
+
+    extent: Float
+    radius: Float
+    movable: NDArray[np.bool_]
+    """(R, N) robots that can be pushed (not standing still)."""
+    ghost: Int
     carrier_x: Float
     carrier_y: Float
-    carrier_extent: Float
-    carrier_radius: Float
+    carrier_half: float
+    carrier_reach: Float
+    """(R, N, 1) ``(extent + carrier_half) + radius``: how near a carrier's centre touches."""
     margin: Float
     arena: float
+    reach_bound: float
+    """No robot pair's reach ``(extent_i + extent_j) + (radius_i + radius_j)`` exceeds it."""
+    reach: Float | None
+    """(R, N, N) each robot pair's reach (dense path), else None."""
+    allowed: NDArray[np.bool_] | None
+    """(R, N, N) pairs that can push robot i: i movable, j another robot (dense path)."""
+    blocks: NDArray[np.bool_] | Grid
+    """(R, N, C) carriers that block each robot (dense path), or the obstacle carriers
+    (present, not carried) binned (grid path)."""
+    carrier_bound: float
+    """No robot's reach against a carrier exceeds it."""
 
 
 def _bodies(s: WorldState, params: Params) -> _Bodies:
-    robots = s.mode.shape[1]
+    runs, robots = s.mode.shape
+    carriers = s.carrier_pos.shape[1]
     extent, radius = body_shape(s.mode, s.target, params)
     movable = ~in_modes(s.mode, STILL_MODES)
-    share = np.where(
-        movable[:, :, None] & movable[:, None, :], 0.5, np.where(movable[:, :, None], 1.0, 0.0)
-    )
-    share[:, np.arange(robots), np.arange(robots)] = 0.0
-    index = np.arange(robots)
-    carriers = np.arange(s.carrier_pos.shape[1])
-    obstacle = (s.present & (s.carried_by < 0))[:, None, :] & (carriers != s.ghost[..., None])
-    shape = obstacle.shape
-    carrier_extent = np.broadcast_to(extent[..., None] + params.carrier_half, shape)
+    obstacle = s.present & (s.carried_by < 0)
+    carrier_reach = (extent + params.carrier_half)[..., None] + radius[..., None]
+    reach_bound = 2.0 * float(np.max(extent + radius))
+    carrier_bound = float(np.max(carrier_reach))
+    reach = allowed = None
+    blocks: NDArray[np.bool_] | Grid
+    if not grid_pays("robots", runs * robots, robots):
+        index = np.arange(robots)
+        reach = (extent[:, :, None] + extent[:, None, :]) + (
+            radius[:, :, None] + radius[:, None, :]
+        )
+        allowed = movable[:, :, None] & (index[:, None] != index[None, :])
+    if grid_pays("obstacles", runs * robots, carriers):
+        blocks = build_grid(s.carrier_pos[..., 0], s.carrier_pos[..., 1], obstacle, carrier_bound)
+    else:
+        others = np.arange(carriers) != s.ghost[..., None]
+        blocks = obstacle[:, None, :] & others & movable[..., None]
     return _Bodies(
-        pair_extent=extent[:, :, None] + extent[:, None, :],
-        pair_radius=radius[:, :, None] + radius[:, None, :],
-        share=share,
-        tie=np.where(index[:, None] < index[None, :], -1.0, 1.0),
-        obstacle=obstacle & movable[..., None],
+        extent=extent,
+        radius=radius,
+        movable=movable,
+        ghost=s.ghost,
         carrier_x=s.carrier_pos[..., 0],
         carrier_y=s.carrier_pos[..., 1],
-        carrier_extent=carrier_extent,
-        carrier_radius=np.broadcast_to(radius[..., None], shape),
+        carrier_half=params.carrier_half,
+        carrier_reach=carrier_reach,
         margin=extent + radius,
         arena=params.arena,
+        reach_bound=reach_bound,
+        reach=reach,
+        allowed=allowed,
+        blocks=blocks,
+        carrier_bound=carrier_bound,
     )
 
 
@@ -158,34 +192,71 @@ def _summed(
     return sum_x.reshape(shape), sum_y.reshape(shape)
 
 
+def _robot_pairs(x: Float, y: Float, b: _Bodies) -> tuple[Int, Int, Int]:
+    """(run, i, j), in ``np.nonzero`` order: robot pairs close enough to touch that push i.
+
+    Close enough: ``|x_i - x_j|`` and ``|y_i - y_j|`` both under the pair's
+    reach; i movable, j another robot.
+    """
+    if b.reach is not None and b.allowed is not None:
+        dx = x[:, :, None] - x[:, None, :]
+        dy = y[:, :, None] - y[:, None, :]
+        near = (np.abs(dx) < b.reach) & (np.abs(dy) < b.reach) & b.allowed
+        runs, robots, others = np.nonzero(near)
+        return runs, robots, others
+    grid = build_grid(x, y, np.ones(x.shape, dtype=bool), b.reach_bound)
+    runs, robots, others = near_points(grid, x, y, b.movable, b.reach_bound)
+    reach = (b.extent[runs, robots] + b.extent[runs, others]) + (
+        b.radius[runs, robots] + b.radius[runs, others]
+    )
+    dx = x[runs, robots] - x[runs, others]
+    dy = y[runs, robots] - y[runs, others]
+    near = (np.abs(dx) < reach) & (np.abs(dy) < reach) & (robots != others)
+    shape = (*x.shape, x.shape[1])
+    return sorted_pairs(runs[near], robots[near], others[near], shape)
+
+
+def _carrier_pairs(x: Float, y: Float, b: _Bodies) -> tuple[Int, Int, Int]:
+    """(run, i, c), in ``np.nonzero`` order: robots close enough to touch a blocking carrier.
+
+    Blocks: present, not carried, not the carrier the robot is under, and
+    the robot movable.
+    """
+    if not isinstance(b.blocks, Grid):
+        cx = x[:, :, None] - b.carrier_x[:, None, :]
+        cy = y[:, :, None] - b.carrier_y[:, None, :]
+        close = (np.abs(cx) < b.carrier_reach) & (np.abs(cy) < b.carrier_reach) & b.blocks
+        runs, robots, carriers = np.nonzero(close)
+        return runs, robots, carriers
+    runs, robots, carriers = near_points(b.blocks, x, y, b.movable, b.carrier_bound)
+    reach = b.carrier_reach[runs, robots, 0]
+    cx = x[runs, robots] - b.carrier_x[runs, carriers]
+    cy = y[runs, robots] - b.carrier_y[runs, carriers]
+    close = (np.abs(cx) < reach) & (np.abs(cy) < reach) & (carriers != b.ghost[runs, robots])
+    shape = (*x.shape, b.carrier_x.shape[1])
+    return sorted_pairs(runs[close], robots[close], carriers[close], shape)
+
+
 def _collision_pass(x: Float, y: Float, b: _Bodies) -> tuple[Float, Float, bool]:
     """One Jacobi pass; also says whether any pair was close enough to touch."""
     shape = x.shape
-    dx = x[:, :, None] - x[:, None, :]
-    dy = y[:, :, None] - y[:, None, :]
-    reach = b.pair_extent + b.pair_radius
-    near = (np.abs(dx) < reach) & (np.abs(dy) < reach) & (b.share > 0)
-    runs, robots, others = np.nonzero(near)
+    runs, robots, others = _robot_pairs(x, y, b)
     push_x, push_y, _ = contact_xy(
-        dx[runs, robots, others],
-        dy[runs, robots, others],
-        b.pair_extent[runs, robots, others],
-        b.pair_radius[runs, robots, others],
-        b.tie[robots, others],
+        x[runs, robots] - x[runs, others],
+        y[runs, robots] - y[runs, others],
+        b.extent[runs, robots] + b.extent[runs, others],
+        b.radius[runs, robots] + b.radius[runs, others],
+        np.where(robots < others, -1.0, 1.0),
     )
-    weight = b.share[runs, robots, others]
+    weight = np.where(b.movable[runs, others], 0.5, 1.0)  # shared, or all of it
     robot_x, robot_y = _summed(runs, robots, shape, push_x * weight, push_y * weight)
 
-    cx = x[:, :, None] - b.carrier_x[:, None, :]
-    cy = y[:, :, None] - b.carrier_y[:, None, :]
-    reach = b.carrier_extent + b.carrier_radius
-    close = (np.abs(cx) < reach) & (np.abs(cy) < reach) & b.obstacle
-    runs_c, robots_c, carriers = np.nonzero(close)
+    runs_c, robots_c, carriers = _carrier_pairs(x, y, b)
     push_x, push_y, _ = contact_xy(
-        cx[runs_c, robots_c, carriers],
-        cy[runs_c, robots_c, carriers],
-        b.carrier_extent[runs_c, robots_c, carriers],
-        b.carrier_radius[runs_c, robots_c, carriers],
+        x[runs_c, robots_c] - b.carrier_x[runs_c, carriers],
+        y[runs_c, robots_c] - b.carrier_y[runs_c, carriers],
+        b.extent[runs_c, robots_c] + b.carrier_half,
+        b.radius[runs_c, robots_c],
         1.0,
     )
     carrier_x, carrier_y = _summed(runs_c, robots_c, shape, push_x, push_y)

@@ -27,10 +27,12 @@ The distance used for selection is from the robot to the known position.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Final
 
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag.sim.broad_phase import build_grid, grid_pays, near_segments
 from swarmtag.sim.geometry import Float, length, segment_crosses_box, segment_near_point
 from swarmtag.sim.params import Params
 from swarmtag.sim.randomness import TickInputs
@@ -47,6 +49,9 @@ __all__ = [
     "sense",
     "sensed_state",
 ]
+
+_SIGHT_CELL: Final = 0.75
+"""Cell side (m) of the occluder grids: a line of sight spans a few such cells."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,26 +115,76 @@ def line_of_sight(
     """``visible`` (R, N, C) with the sightings whose line of sight is blocked removed.
 
     Occluders: other carriers in the arena and not carried (their squares),
-    and with ``carriers+robots`` the other robots (their discs).
+    and with ``carriers+robots`` the other robots (their discs). Many
+    occluders: only those near each line are tested
+    (``swarmtag.sim.broad_phase``; the same result).
     """
     runs, robots, carriers = np.nonzero(visible)
     if runs.size == 0:
         return visible
     start = state.robot_pos[runs, robots]  # (K, 2)
     end = state.carrier_pos[runs, carriers]
-    others = state.carrier_pos[runs]  # (K, C, 2)
-    blocking = (state.present & (state.carried_by < 0))[runs]
-    blocking &= np.arange(state.carrier_pos.shape[1])[None, :] != carriers[:, None]
-    crosses = segment_crosses_box(start[:, None, :], end[:, None, :], others, params.carrier_half)
-    blocked = (crosses & blocking).any(axis=1)
+    obstacle = state.present & (state.carried_by < 0)
+    if not grid_pays("sight", runs.size, obstacle.shape[1]):
+        others = state.carrier_pos[runs]  # (K, C, 2)
+        blocking = obstacle[runs]
+        blocking &= np.arange(state.carrier_pos.shape[1])[None, :] != carriers[:, None]
+        half = params.carrier_half
+        crosses = segment_crosses_box(start[:, None, :], end[:, None, :], others, half)
+        blocked = (crosses & blocking).any(axis=1)
+    else:
+        blocked = _hidden_by_carriers(state, obstacle, (runs, carriers, start, end), params)
     if params.occlusion >= 2:
-        bodies = state.robot_pos[runs]  # (K, N, 2)
-        near = segment_near_point(start[:, None, :], end[:, None, :], bodies, params.robot_radius)
-        near &= np.arange(state.robot_pos.shape[1])[None, :] != robots[:, None]
-        blocked |= near.any(axis=1)
+        if not grid_pays("sight", runs.size, state.robot_pos.shape[1]):
+            bodies = state.robot_pos[runs]  # (K, N, 2)
+            radius = params.robot_radius
+            near = segment_near_point(start[:, None, :], end[:, None, :], bodies, radius)
+            near &= np.arange(state.robot_pos.shape[1])[None, :] != robots[:, None]
+            blocked |= near.any(axis=1)
+        else:
+            blocked |= _hidden_by_robots(state, (runs, robots, start, end), params)
     result = visible.copy()
     result[runs[blocked], robots[blocked], carriers[blocked]] = False
     return result
+
+
+_Lines = tuple[Int, Int, Float, Float]
+"""Sightings: run, robot or carrier, start (K, 2), end (K, 2)."""
+
+
+def _hidden_by_carriers(
+    state: WorldState, obstacle: NDArray[np.bool_], lines: _Lines, params: Params
+) -> NDArray[np.bool_]:
+    """(K,): lines that cross another obstacle carrier's square (grid).
+
+    A segment crosses the square only if the square's centre lies within
+    ``carrier_half`` of the segment's bounding box.
+    """
+    runs, carriers, start, end = lines
+    half = params.carrier_half
+    pos = state.carrier_pos
+    grid = build_grid(pos[..., 0], pos[..., 1], obstacle, _SIGHT_CELL)
+    line, other = near_segments(grid, runs, start, end, half)
+    crosses = segment_crosses_box(start[line], end[line], pos[runs[line], other], half)
+    crosses &= other != carriers[line]
+    blocked = np.zeros(runs.size, dtype=bool)
+    blocked[line[crosses]] = True
+    return blocked
+
+
+def _hidden_by_robots(state: WorldState, lines: _Lines, params: Params) -> NDArray[np.bool_]:
+    """(K,): lines that pass closer than a robot radius to another robot (grid)."""
+    runs, robots, start, end = lines
+    radius = params.robot_radius
+    pos = state.robot_pos
+    everyone = np.ones(pos.shape[:2], dtype=bool)
+    grid = build_grid(pos[..., 0], pos[..., 1], everyone, _SIGHT_CELL)
+    line, other = near_segments(grid, runs, start, end, radius)
+    near = segment_near_point(start[line], end[line], pos[runs[line], other], radius)
+    near &= other != robots[line]
+    blocked = np.zeros(runs.size, dtype=bool)
+    blocked[line[near]] = True
+    return blocked
 
 
 def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:

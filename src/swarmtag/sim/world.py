@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from swarmtag.errors import SimulationError
 from swarmtag.sim._index import at_robots, is_loaded
+from swarmtag.sim.broad_phase import first_claims
 from swarmtag.sim.control import Arrivals, Carrying, LiftAnswers
 from swarmtag.sim.events import EventKind, TickEvents
 from swarmtag.sim.geometry import length
@@ -95,14 +96,7 @@ def answer_lifts(
         & at_robots(s.present, lift)
         & _under(s, lift, params)
     )
-    robots = s.mode.shape[1]
-    index = np.arange(robots)
-    rival = (
-        claim[:, None, :]
-        & (lift[:, None, :] == lift[:, :, None])
-        & (index[None, :] < index[:, None])[None, :, :]
-    ).any(axis=-1)  # a smaller-id robot claims the same carrier
-    win = claim & ~rival
+    win = first_claims(claim, lift, s.carrier_pos.shape[1])  # a smaller id claiming it wins
     lose = want & ~win
     events.add(EventKind.LIFT_REFUSED, lose, lift, status.astype(np.float64))
     runs, holders = np.nonzero(win)
