@@ -20,7 +20,7 @@ from swarmtag.sim.fast._grid import near
 from swarmtag.sim.fast._jit import inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
-__all__ = ["break_down_robots", "decide_robots"]
+__all__ = ["break_down_robots", "decide_robots", "to_walk"]
 
 _WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
 _AWAITING = 1
@@ -36,7 +36,7 @@ def _loaded(mode: int, target: int) -> bool:
 
 
 @inlined
-def _to_walk(r: int, n: int, w: World) -> None:
+def to_walk(r: int, n: int, w: World) -> None:
     """``_index.to_walk`` for one robot."""
     w.mode[r, n] = _WALK
     w.target[r, n] = -1
@@ -137,11 +137,11 @@ def _pursuit_check(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -
     heard = w.known_status[r, n, max(target, 0)]
     if heard != _AWAITING:
         emit(r, n, _ABANDON, target, float(heard), x)
-        _to_walk(r, n, w)
+        to_walk(r, n, w)
     elif t - w.pursuit_start[r, n] >= k.timeout_ticks:
         emit(r, n, _TIMEOUT, target, np.nan, x)
         w.blocked_until[r, n, target] = t + k.cooldown_ticks
-        _to_walk(r, n, w)
+        to_walk(r, n, w)
 
 
 @inlined

@@ -9,6 +9,7 @@ mark. ``free_faces_run`` is ``predock.free_faces`` for one run.
 
 from __future__ import annotations
 
+from swarmtag.sim.fast._decide import to_walk
 from swarmtag.sim.fast._events import emit
 from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, contact, maximum, minimum, norm
 from swarmtag.sim.fast._grid import near
@@ -36,15 +37,6 @@ FAILURE_NOT_PICKED_UP = 1
 """``Scratch.failure``: a robot released a carrier whose tag is not PICKED_UP."""
 FAILURE_LOWERED = 2
 """``Scratch.failure``: a robot lowered a carrier it does not hold, or outside the drop-off area."""
-
-
-@inlined
-def _to_walk(r: int, n: int, w: World) -> None:
-    w.mode[r, n] = _WALK
-    w.target[r, n] = -1
-    w.face[r, n] = -1
-    w.timer[r, n] = 0
-    w.redirect[r, n] = True
 
 
 @inlined
@@ -161,7 +153,7 @@ def carry_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -
     """The ``carry`` step: lift, transport, release requests (``docking.carry``)."""
     for n in range(lo, hi):
         if x.refused[r, n]:
-            _to_walk(r, n, w)
+            to_walk(r, n, w)
         if x.accepted[r, n]:
             w.mode[r, n] = _LIFT
             w.timer[r, n] = k.lift_ticks
@@ -179,7 +171,7 @@ def carry_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -
         x.lower[r, n] = -1
         if w.mode[r, n] == _RELEASE and w.timer[r, n] == 0:
             x.lower[r, n] = w.target[r, n]
-            _to_walk(r, n, w)
+            to_walk(r, n, w)
 
 
 @inlined
