@@ -46,8 +46,8 @@ from swarmtag.sim.wms import operator_writes
 
 __all__ = ["default_threads", "kernel_compiled", "simulate_fast"]
 
-_WORK_PER_CALL: Final = 2_000_000
-"""Robot-ticks per kernel call at most (about 0.1-0.2 s): bounds Ctrl-C latency and turn blocks."""
+_WORK_PER_CALL: Final = 1_000_000
+"""Robot-ticks per kernel call at most (0.1-0.25 s; at least a tick): bounds Ctrl-C latency."""
 _MAX_TICKS_PER_CALL: Final = 4096
 _GROUPS_PER_THREAD: Final = 4
 """Runs go to the threads in this many groups per thread (runs end at different ticks)."""
