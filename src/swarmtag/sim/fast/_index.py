@@ -17,7 +17,7 @@ from swarmtag.sim.fast._grid import fill
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
-__all__ = ["index_obstacles", "index_robots"]
+__all__ = ["grid_robots", "index_obstacles", "index_robots"]
 
 
 @inlined
@@ -69,6 +69,14 @@ def index_obstacles(r: int, w: World, k: Constants, x: Scratch) -> None:
 
 
 @inlined
+def grid_robots(r: int, k: Constants, x: Scratch) -> None:
+    """Sort run ``r``'s robots, at ``x.x``/``x.y``, into the fine robot grid."""
+    fill(
+        r, x.x, x.y, k.robots, k.grid_cell, k.robot_bits, x.robot_start, x.robot_items, x.robot_keys
+    )
+
+
+@inlined
 def index_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
     """Grid run ``r``'s robots where they stand at the tick's start (large swarms)."""
     if not k.robot_grid:
@@ -77,17 +85,7 @@ def index_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
         x.x[r, n] = w.robot_pos[r, n, 0]
         x.y[r, n] = w.robot_pos[r, n, 1]
     if k.avoid_taken_faces:  # robots standing on predock points
-        fill(
-            r,
-            x.x,
-            x.y,
-            k.robots,
-            k.grid_cell,
-            k.robot_bits,
-            x.robot_start,
-            x.robot_items,
-            x.robot_keys,
-        )
+        grid_robots(r, k, x)
     if k.occlusion >= 2:  # robots hiding carriers
         fill(
             r,

@@ -24,7 +24,8 @@ from swarmtag.sim.fast._geometry import (
     step_towards,
     turn_towards,
 )
-from swarmtag.sim.fast._grid import fill, near
+from swarmtag.sim.fast._grid import near
+from swarmtag.sim.fast._index import grid_robots
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
@@ -269,7 +270,7 @@ def _next_active(r: int, movers: int, k: Constants, x: Scratch) -> int:
     position again: leaving it out changes nothing. Returns how many.
     """
     cell = k.grid_cell
-    fill(r, x.x, x.y, k.robots, cell, k.robot_bits, x.robot_start, x.robot_items, x.robot_keys)
+    grid_robots(r, k, x)
     x.stamp[r] += 1
     stamp = x.stamp[r]
     count = 0
@@ -313,17 +314,7 @@ def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
         x.active[r, n] = n
     count = k.robots
     if k.robot_grid:
-        fill(
-            r,
-            x.x,
-            x.y,
-            k.robots,
-            k.grid_cell,
-            k.robot_bits,
-            x.robot_start,
-            x.robot_items,
-            x.robot_keys,
-        )
+        grid_robots(r, k, x)
         for j in range(k.robots):  # bucket by bucket: neighbours' buckets stay in cache
             x.active[r, j] = x.robot_items[r, j]
     for it in range(k.collision_iterations):
