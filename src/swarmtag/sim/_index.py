@@ -7,6 +7,8 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag.sim.floor_motion import inside_area
+from swarmtag.sim.params import Params
 from swarmtag.sim.state import Int, Mode, WorldState
 
 __all__ = [
@@ -15,6 +17,7 @@ __all__ = [
     "STILL_MODES",
     "at_robots",
     "grid",
+    "in_dropoff",
     "in_modes",
     "is_loaded",
     "own",
@@ -72,3 +75,18 @@ def to_walk(state: WorldState, mask: NDArray[np.bool_]) -> None:
     state.face[mask] = -1
     state.timer[mask] = 0
     state.redirect[mask] = True
+
+
+def in_dropoff(s: WorldState, params: Params, carrier: Int) -> NDArray[np.bool_]:
+    """(R, N) robots whose load ``carrier`` would lie wholly inside its drop-off area.
+
+    The lab: ``x - carrier_half >= dropoff_left``; a warehouse: the carrier's
+    square inside the cells of its destination's area (``floor_motion``).
+    """
+    x = s.robot_pos[..., 0]
+    if params.floor is None:
+        inside: NDArray[np.bool_] = x - params.carrier_half >= params.dropoff_left
+        return inside
+    area_ids = np.asarray(params.floor.destinations, dtype=np.int64)
+    area = area_ids[at_robots(s.destination, carrier)]
+    return inside_area(x, s.robot_pos[..., 1], params.carrier_half, area, params.floor)

@@ -4,9 +4,10 @@ The mapping mirrors the dataclasses: top-level keys (``robots``,
 ``carriers``, ``ticks``, ``tick``, ``detection_radius``, ``perception``,
 ``time_unit``), one table per part (``[arena]``, ``[bodies]``, ``[motion]``,
 ``[walk]``, ``[radio]``, ``[camera]``, ``[timing]``, ``[urgency]``,
-``[realism]``) and an array of tables ``[[reprioritisations]]``. Overrides
-are merged on top (nested tables or dotted keys such as ``"arena.size"``);
-parts not given take the defaults, the arena scaled for the carrier count.
+``[realism]``, and ``[warehouse]``, absent unless given) and an array of
+tables ``[[reprioritisations]]``. Overrides are merged on top (nested
+tables or dotted keys such as ``"arena.size"``); parts not given take the
+defaults, the arena scaled for the carrier count.
 Unknown keys are errors that name the key and list the known ones.
 """
 
@@ -32,6 +33,7 @@ from swarmtag.sim.groups import (
     Walk,
 )
 from swarmtag.sim.sensors import Camera, Radio
+from swarmtag.sim.warehouse import Warehouse
 
 __all__ = ["flat_keys", "load_toml", "merge_layers", "scenario_fields", "scenario_to_mapping"]
 
@@ -45,7 +47,10 @@ _PARTS: Final[dict[str, type[Any]]] = {
     "timing": Timing,
     "urgency": UrgencyModel,
     "realism": Realism,
+    "warehouse": Warehouse,
 }
+_OPTIONAL_PARTS: Final = ("warehouse",)
+"""Parts that are absent (None) unless the mapping has their table."""
 _SCALARS: Final = (
     "robots",
     "carriers",
@@ -184,6 +189,7 @@ def scenario_to_mapping(values: Mapping[str, Any]) -> dict[str, Any]:
     for name in _SCALARS:
         result[name] = values[name]
     for name in _PARTS:
-        result[name] = asdict(values[name])
+        if values[name] is not None or name not in _OPTIONAL_PARTS:
+            result[name] = asdict(values[name])
     result[_EVENTS] = [asdict(event) for event in values[_EVENTS]]
     return result

@@ -19,8 +19,10 @@
 1. a robot whose lift write was refused returns to random walk; one whose
    write was accepted holds the carrier for ``lift_ticks`` (LIFT);
 2. a robot whose lift is up heads for the drop-off area (TRANSPORT), to the
-   point at the area's middle x and its own y (kept clear of the walls);
-3. a loaded robot whose carrier lies wholly inside the drop-off area lowers
+   point at the area's middle x and its own y (kept clear of the walls); in
+   a warehouse along its path to the carrier's destination area (the move
+   sets each tick's waypoint);
+3. a loaded robot whose carrier lies wholly inside its drop-off area lowers
    it for ``release_ticks`` (RELEASE), then writes IDLE (the world delivers
    the carrier) and walks again.
 """
@@ -32,7 +34,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag.sim._index import at_robots, in_modes, to_walk
+from swarmtag.sim._index import at_robots, in_dropoff, in_modes, to_walk
 from swarmtag.sim.broad_phase import first_claims
 from swarmtag.sim.control import Arrivals, Carrying, LiftAnswers
 from swarmtag.sim.geometry import FACE_NORMALS, length
@@ -103,12 +105,13 @@ def carry(s: WorldState, answers: LiftAnswers, *, params: Params, t: int) -> Car
         s.mode[raised] = Mode.TRANSPORT
         s.stuck[raised] = 0
         s.sidestep[raised] = 0
-        y = np.clip(s.robot_pos[..., 1], params.carrier_half, params.arena - params.carrier_half)
-        goal = np.stack((np.full(y.shape, params.transport_x), y), axis=-1)
-        np.copyto(s.goal, goal, where=raised[..., None])
+        if params.floor is None:
+            high = params.arena - params.carrier_half
+            y = np.clip(s.robot_pos[..., 1], params.carrier_half, high)
+            goal = np.stack((np.full(y.shape, params.transport_x), y), axis=-1)
+            np.copyto(s.goal, goal, where=raised[..., None])
 
-    inside = s.robot_pos[..., 0] - params.carrier_half >= params.dropoff_left
-    arriving = (s.mode == Mode.TRANSPORT) & inside
+    arriving = (s.mode == Mode.TRANSPORT) & in_dropoff(s, params, s.target)
     s.mode[arriving] = Mode.RELEASE
     s.timer[arriving] = params.release_ticks
 

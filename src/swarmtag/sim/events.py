@@ -18,6 +18,8 @@ Event kinds (the ``kind`` column), in the order they can happen in a tick:
                    ``value`` = urgency
 ``reprioritise``   an operator write set a carrier's urgency; ``value`` = the new
                    urgency; ``robot`` is empty
+``arrive``         a warehouse order was placed on a pick-up slot; ``value`` = its
+                   urgency; ``robot`` is empty
 =================  ==========================================================
 
 Rows are sorted by run, time, kind (the order above), robot, carrier, so a
@@ -51,6 +53,7 @@ class EventKind(IntEnum):
     LIFT_REFUSED = 7
     DELIVER = 8
     REPRIORITISE = 9
+    ARRIVE = 10
 
     @property
     def label(self) -> str:

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from swarmtag.errors import InvariantError
 from swarmtag.sim._index import is_loaded
 from swarmtag.sim.events import TickEvents
+from swarmtag.sim.floor_motion import keep_off_shelves
 from swarmtag.sim.geometry import contact_push
 from swarmtag.sim.motion import body_shape
 from swarmtag.sim.params import Params
@@ -46,13 +47,24 @@ def _fail(state: WorldState, mask: NDArray[np.bool_], rule: str) -> None:
 def _bodies(state: WorldState, params: Params) -> None:
     extent, radius = body_shape(state.mode, state.target, params)
     margin = (extent + radius)[..., None]
+    size = np.array([params.arena, params.arena_height])
     outside = (state.robot_pos < margin - _WALL_TOLERANCE) | (
-        state.robot_pos > params.arena - margin + _WALL_TOLERANCE
+        state.robot_pos > size - margin + _WALL_TOLERANCE
     )
     if outside.any():
         _fail(
             state, np.logical_or(outside[..., 0], outside[..., 1]), "a robot is outside the arena"
         )
+    if params.floor is not None:
+        x, y = state.robot_pos[..., 0], state.robot_pos[..., 1]
+        row, col = params.floor.cell_of(x, y)
+        kept_x, kept_y = keep_off_shelves(
+            x, y, extent=extent, radius=radius, row=row, col=col, floor=params.floor
+        )
+        into = np.maximum(np.abs(kept_x - x), np.abs(kept_y - y))
+        on_shelf = params.floor.blocked[row + 1, col + 1] | (into > OVERLAP_TOLERANCE)
+        if on_shelf.any():
+            _fail(state, on_shelf, f"a robot overlaps a shelf by {into.max():.4f} m")
     robots = state.mode.shape[1]
     between = state.robot_pos[:, :, None, :] - state.robot_pos[:, None, :, :]
     _, depth = contact_push(
@@ -95,8 +107,12 @@ def _carriers(before: WorldState, after: WorldState) -> None:
     left = before.present & ~after.present
     if (left != ((before.delivery_time < 0) & (after.delivery_time >= 0))).any():
         _fail(after, left, "a carrier left the arena other than by delivery")
-    if (~before.present & after.present).any():
-        _fail(after, ~before.present & after.present, "a delivered carrier came back")
+    back = ~before.present & after.present & (before.delivery_time >= 0)
+    if back.any():
+        _fail(after, back, "a delivered carrier came back")
+    placed = ~before.present & after.present
+    if (placed & (after.arrival_time != after.tick)).any():
+        _fail(after, placed & (after.arrival_time != after.tick), "a carrier appeared unplaced")
     changed = before.status != after.status
     allowed = ROBOT_WRITE_ALLOWED[before.status.astype(np.int64), after.status.astype(np.int64)]
     if (changed & ~allowed).any():

@@ -7,8 +7,9 @@ collisions (``motion``) -> the controller arrives -> docking and the tags'
 answers to lift writes (``world``) -> the controller carries -> deliveries
 (``world``) -> end of tick (tags' urgency growth, the advertised state
 history, run ends) -> the operator writes due this tick (``wms``, fed by
-``inputs.writes``). It returns the next state and the tick's events; the
-state it is given is left untouched. The whole tick happens here, so
+``inputs.writes``) -> warehouse orders that fell due are placed
+(``orders``). It returns the next state and the tick's events; the state it
+is given is left untouched. The whole tick happens here, so
 another backend given the same state and inputs can reproduce it.
 
 A run that has ended (every carrier delivered, or its time limit) is frozen:
@@ -26,6 +27,7 @@ from swarmtag.sim.builtin import BUILTIN
 from swarmtag.sim.control import Controller
 from swarmtag.sim.events import TickEvents
 from swarmtag.sim.motion import move, resolve
+from swarmtag.sim.orders import place_orders
 from swarmtag.sim.params import Params
 from swarmtag.sim.randomness import TickInputs
 from swarmtag.sim.sense import sense, sensed_state
@@ -39,14 +41,15 @@ __all__ = ["step"]
 
 def _end_of_tick(s: WorldState, params: Params, t: int) -> None:
     """Grow urgencies, record what the tags advertise, and mark runs that end now."""
-    growing = ~np.isnan(s.w0)
+    growing = ~np.isnan(s.w0) & (s.arrival_time >= 0)
     if growing.any():
         grown = growing_urgency(np.where(growing, s.w0, 0.0), t, params.horizon)
         np.copyto(s.urgency, grown, where=growing)
     slot = t % (params.status_delay + 1)
     s.adv_status[:, slot] = s.status
     s.adv_urgency[:, slot] = s.urgency
-    ends = (s.ended_at < 0) & ((~s.present).all(axis=1) | (t >= params.run_ticks))
+    done = (~s.present & (s.arrival_time >= 0)).all(axis=1)  # all placed orders gone
+    ends = (s.ended_at < 0) & (done | (t >= params.run_ticks))
     s.ended_at[ends] = t
 
 
@@ -83,6 +86,7 @@ def step(
     deliver(s, carrying, answers=answers, params=params, t=t, events=events)
     _end_of_tick(s, params, t)
     operator_writes(s, inputs.writes, t=t, events=events)
+    place_orders(s, params, t=t, events=events)
     ended = state.ended_at >= 0
     if ended.any():
         return _freeze(state, s, ended), events.masked(~ended)

@@ -2,7 +2,8 @@
 
 Move: a walking robot drives its step along its random-walk direction; a
 robot in PREDOCK drives straight at the predock point of its face, DOCK at
-the carrier centre, TRANSPORT at its drop-off goal (or along its sidestep),
+the carrier centre, TRANSPORT at its drop-off goal (in a warehouse, the next waypoint of
+its path to the carrier's destination area) or along its sidestep,
 each landing exactly on the goal when nearer than a step. Robots that
 centre, lift, release or are broken stand still. Headings turn at most one
 turn step per tick: a walking robot towards its walk direction, a moving
@@ -14,7 +15,8 @@ Resolve (Jacobi): ``collision_iterations`` passes; each computes every
 overlap from the positions at the start of the pass, then moves every robot
 at once by ``(p + sum of robot pushes) + sum of carrier pushes`` (each sum
 over the touching bodies in index order, starting from 0.0), then clamps it
-inside the walls (x and y separately). A pair of movable robots
+inside the walls (x and y separately) and, in a warehouse, off the shelves
+(``swarmtag.sim.floor_motion``). A pair of movable robots
 share a push half and half; a robot that stands still is not moved and the
 other takes the whole push; carriers (present, not carried) are fixed
 obstacles, except the one a robot is under (docking or driving out). A
@@ -36,6 +38,8 @@ from numpy.typing import NDArray
 
 from swarmtag.sim._index import STILL_MODES, at_robots, in_modes, is_loaded
 from swarmtag.sim.broad_phase import Grid, build_grid, grid_pays, near_points, sorted_pairs
+from swarmtag.sim.floor_map import FloorMap
+from swarmtag.sim.floor_motion import keep_off_shelves, start_cells, transport_waypoints
 from swarmtag.sim.geometry import (
     FACE_NORMALS,
     Float,
@@ -67,6 +71,12 @@ def move(s: WorldState, params: Params) -> Float:
     Turns headings and counts down sidesteps in place.
     """
     mode, pos, speed = s.mode, s.robot_pos, s.speed
+    if params.floor is not None:
+        carrying = mode == Mode.TRANSPORT
+        if carrying.any():
+            destination = at_robots(s.destination, s.target)
+            waypoint = transport_waypoints(pos, destination, params.floor)
+            np.copyto(s.goal, waypoint, where=carrying[..., None])
     centre = at_robots(s.carrier_pos, s.target)
     normal = FACE_NORMALS[np.maximum(s.face, 0)]
     predock = centre + normal * params.predock_offset
@@ -127,6 +137,12 @@ class _Bodies:
     """(R, N, 1) ``(extent + carrier_half) + radius``: how near a carrier's centre touches."""
     margin: Float
     arena: float
+    arena_height: float
+    floor: FloorMap | None
+    """The warehouse floor whose shelves keep robots out (None: the lab arena)."""
+    start_row: Int
+    start_col: Int
+    """(R, N) the cell each robot started the tick in (warehouse only; else empty)."""
     reach_bound: float
     """No robot pair's reach ``(extent_i + extent_j) + (radius_i + radius_j)`` exceeds it."""
     reach: Float | None
@@ -162,6 +178,8 @@ def _bodies(s: WorldState, params: Params) -> _Bodies:
     else:
         others = np.arange(carriers) != s.ghost[..., None]
         blocks = obstacle[:, None, :] & others & movable[..., None]
+    empty = np.zeros((0,), dtype=np.int64)
+    start = (empty, empty) if params.floor is None else start_cells(params.floor, s.robot_pos)
     return _Bodies(
         extent=extent,
         radius=radius,
@@ -173,6 +191,10 @@ def _bodies(s: WorldState, params: Params) -> _Bodies:
         carrier_reach=carrier_reach,
         margin=extent + radius,
         arena=params.arena,
+        arena_height=params.arena_height,
+        floor=params.floor,
+        start_row=start[0],
+        start_col=start[1],
         reach_bound=reach_bound,
         reach=reach,
         allowed=allowed,
@@ -262,9 +284,18 @@ def _collision_pass(x: Float, y: Float, b: _Bodies) -> tuple[Float, Float, bool]
     carrier_x, carrier_y = _summed(runs_c, robots_c, shape, push_x, push_y)
     new_x = (x + robot_x) + carrier_x
     new_y = (y + robot_y) + carrier_y
-    high = b.arena - b.margin
-    new_x = np.minimum(np.maximum(new_x, b.margin), high)
-    new_y = np.minimum(np.maximum(new_y, b.margin), high)
+    new_x = np.minimum(np.maximum(new_x, b.margin), b.arena - b.margin)
+    new_y = np.minimum(np.maximum(new_y, b.margin), b.arena_height - b.margin)
+    if b.floor is not None:
+        new_x, new_y = keep_off_shelves(
+            new_x,
+            new_y,
+            extent=b.extent,
+            radius=b.radius,
+            row=b.start_row,
+            col=b.start_col,
+            floor=b.floor,
+        )
     return new_x, new_y, bool(runs.size or runs_c.size)
 
 

@@ -17,9 +17,11 @@ from numpy.typing import NDArray
 
 from swarmtag.errors import ConfigError
 from swarmtag.policy import Policy
+from swarmtag.sim.floor_map import FloorMap
 from swarmtag.sim.groups import seconds_to_ticks
 from swarmtag.sim.scenario import Scenario
 from swarmtag.sim.sensors import OCCLUSION_MODELS
+from swarmtag.sim.warehouse import floor_of
 
 __all__ = ["Params", "make_params"]
 
@@ -28,9 +30,10 @@ __all__ = ["Params", "make_params"]
 class Params:
     """Everything the step kernel needs besides the state and the tick's random inputs.
 
-    Lengths are metres, times ticks. The arena is ``[0, arena]^2``; the
+    Lengths are metres, times ticks. The lab arena is ``[0, arena]^2``; the
     pick-up area is ``x <= pickup_right``, the drop-off area (destination 0)
-    ``x >= dropoff_left``.
+    ``x >= dropoff_left``. A warehouse (``floor`` set) is
+    ``[0, arena] x [0, arena_height]`` with its map's shelves and areas.
     """
 
     scenario: Scenario
@@ -92,7 +95,11 @@ class Params:
     speed_variation: float
     breakdown: float
     markers: NDArray[np.int64]
-    """Marker id of each carrier (its index)."""
+    """Marker id of each carrier (its index; in a warehouse, the order number)."""
+    arena_height: float
+    """The arena's extent in y (``arena`` in the lab; the map's height in a warehouse)."""
+    floor: FloorMap | None
+    """The warehouse floor (shelves, pick-up and drop-off cells); None in the lab arena."""
 
     @property
     def condition(self) -> str:
@@ -122,12 +129,18 @@ def make_params(scenario: Scenario, policy: Policy) -> Params:
     markers = np.arange(scenario.carriers, dtype=np.int64)
     markers.flags.writeable = False
     growing = scenario.urgency.model == "growing"
+    horizon = float(scenario.ticks) if growing else scenario.urgency.static_horizon / tick
+    floor, width, height = None, arena.size, arena.size
+    if scenario.warehouse is not None:
+        floor = floor_of(scenario.warehouse)
+        width, height = floor.width, floor.height
+        horizon = scenario.warehouse.urgency_window / tick
     return Params(
         scenario=scenario,
         policy=policy,
         robots=scenario.robots,
         carriers=scenario.carriers,
-        arena=arena.size,
+        arena=width,
         pickup_right=arena.pickup_width,
         dropoff_left=arena.size - arena.dropoff_width,
         robot_radius=bodies.robot_diameter / 2,
@@ -167,11 +180,13 @@ def make_params(scenario: Scenario, policy: Policy) -> Params:
         collision_iterations=motion.collision_iterations,
         run_ticks=scenario.run_ticks,
         growing=growing,
-        horizon=float(scenario.ticks) if growing else scenario.urgency.static_horizon / tick,
+        horizon=horizon,
         advertisement_loss=scenario.realism.advertisement_loss,
         status_delay=scenario.realism.status_delay,
         detection_noise=scenario.realism.detection_noise,
         speed_variation=scenario.realism.speed_variation,
         breakdown=scenario.realism.breakdown,
         markers=markers,
+        arena_height=height,
+        floor=floor,
     )

@@ -2,10 +2,11 @@
 
 Each carrier has four predock points, one in front of each face (east,
 north, west, south) at ``predock_offset`` from its centre. A point is usable
-("free") when a robot standing there is inside the arena and overlaps no
-other carrier that is an obstacle. A robot docks at the free face whose
-predock point is nearest to it (ties: face order); a carrier with no free
-face cannot be selected until a neighbour leaves. With
+("free") when a robot standing there is inside the arena (in a warehouse:
+off every shelf) and overlaps no other carrier that is an obstacle. A robot
+docks at the free face whose predock point is nearest to it (ties: face
+order); a carrier with no free face cannot be selected until a neighbour
+leaves. With
 ``motion.avoid_taken_faces`` a face is also passed over while the robot
 sees another robot standing on its point (``taken_faces``).
 """
@@ -16,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.sim.broad_phase import build_grid, grid_pays, near_points
+from swarmtag.sim.floor_motion import clear_of_shelves
 from swarmtag.sim.geometry import FACE_NORMALS, Float, contact_push, contact_xy, length
 from swarmtag.sim.params import Params
 
@@ -44,8 +46,11 @@ def free_faces(
     are tested (``swarmtag.sim.broad_phase``; the same result).
     """
     points = predock_points(carrier_pos, params.predock_offset)  # (R, C, 4, 2)
-    low, high = params.robot_radius, params.arena - params.robot_radius
-    inside = np.all((points >= low) & (points <= high), axis=-1)
+    if params.floor is None:
+        low, high = params.robot_radius, params.arena - params.robot_radius
+        inside = np.all((points >= low) & (points <= high), axis=-1)
+    else:
+        inside = clear_of_shelves(points[..., 0], points[..., 1], params.robot_radius, params.floor)
     runs, carriers = obstacle.shape
     if grid_pays("free", runs * carriers * 4, carriers):
         blocked = _blocked_points(points, carrier_pos, obstacle, params)

@@ -25,7 +25,7 @@ from swarmtag._atomic import atomic_path
 from swarmtag._plotting import pyplot
 from swarmtag.errors import ConfigError
 from swarmtag.sim.state import Mode
-from swarmtag.sim.trajectories import Trajectories
+from swarmtag.sim.trajectories import Geometry, Trajectories
 from swarmtag.tag import TagStatus
 
 if TYPE_CHECKING:
@@ -39,6 +39,7 @@ _PURSUING: Final = (Mode.PREDOCK, Mode.DOCK, Mode.CENTRE)
 _LOADED: Final = (Mode.LIFT, Mode.TRANSPORT, Mode.RELEASE)
 _PICKUP_COLOUR: Final = "#dbe9f6"
 _DROPOFF_COLOUR: Final = "#dff0d8"
+_SHELF_COLOUR: Final = "0.55"
 _ROBOT_COLOUR: Final = "tab:blue"
 _BROKEN_COLOUR: Final = "0.35"
 
@@ -70,6 +71,28 @@ def default_snapshot_tick(traj: Trajectories, run: int) -> int:
     return int(traj.time[int(np.argmax(shown))])
 
 
+def _draw_floor(ax: Axes, geo: Geometry) -> None:
+    """A warehouse map: shelves dark, pick-up and drop-off cells tinted, areas numbered."""
+    from matplotlib.patches import Rectangle
+
+    lines = geo.floor_text.splitlines()
+    cell, rows = geo.floor_cell, len(lines)
+    labelled: set[str] = set()
+    for line, text in enumerate(lines):
+        y = (rows - 1 - line) * cell
+        for column, char in enumerate(text):
+            colour = {"#": _SHELF_COLOUR, "P": _PICKUP_COLOUR}.get(
+                char, _DROPOFF_COLOUR if char.isdigit() else None
+            )
+            if colour is None:
+                continue
+            ax.add_patch(Rectangle((column * cell, y), cell, cell, color=colour, zorder=0))
+            if char.isdigit() and char not in labelled:
+                labelled.add(char)
+                ax.text((column + 0.5) * cell, y + 0.5 * cell, char, ha="center", va="center",
+                        fontsize=7, color="0.3", zorder=0)  # fmt: skip
+
+
 def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
     from matplotlib import colormaps
     from matplotlib.patches import Circle, Rectangle
@@ -77,16 +100,19 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
     geo = traj.geometry
     ax.clear()
     ax.set_xlim(0, geo.arena)
-    ax.set_ylim(0, geo.arena)
+    ax.set_ylim(0, geo.extent_y)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    for left, right, colour, label in (
-        (0.0, geo.pickup_right, _PICKUP_COLOUR, "pick-up"),
-        (geo.dropoff_left, geo.arena, _DROPOFF_COLOUR, "drop-off"),
-    ):
-        ax.add_patch(Rectangle((left, 0), right - left, geo.arena, color=colour, zorder=0))
-        ax.text((left + right) / 2, geo.arena * 0.99, label, ha="center", va="top", fontsize=8)
+    if geo.floor_text:
+        _draw_floor(ax, geo)
+    else:
+        for left, right, colour, label in (
+            (0.0, geo.pickup_right, _PICKUP_COLOUR, "pick-up"),
+            (geo.dropoff_left, geo.arena, _DROPOFF_COLOUR, "drop-off"),
+        ):
+            ax.add_patch(Rectangle((left, 0), right - left, geo.arena, color=colour, zorder=0))
+            ax.text((left + right) / 2, geo.arena * 0.99, label, ha="center", va="top", fontsize=8)
     cmap = colormaps["YlOrRd"]
     half = geo.carrier_size / 2
     status = traj.carrier_status[row, index]
@@ -137,8 +163,10 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
 
 def _figure(traj: Trajectories) -> tuple[Any, Figure, Axes]:
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(5.4, 5.6), dpi=110)
     geo = traj.geometry
+    aspect = geo.extent_y / geo.arena
+    width = 5.4 if aspect >= 0.8 else 8.0
+    fig, ax = plt.subplots(figsize=(width, 0.2 + width * aspect), dpi=110)
     ranges = (
         f"dotted: camera range {geo.detection_radius:g} m, dash-dot: radio {geo.radio_range:g} m"
         if geo.radio_range > 0.0

@@ -85,30 +85,35 @@ def carrier_log(state: WorldState, params: Params, *, seed: int) -> CarrierLog:
     Times are ticks, or seconds (ticks times ``tick``) when the scenario's
     ``time_unit`` is ``"s"``. ``run_end`` is when the run ended (every carrier
     delivered, or its time limit); ``urgency_end`` each carrier's urgency when
-    delivered, or at the run's end.
+    delivered, or at the run's end. A warehouse run lists the orders due by
+    its end (those due later were allocated but never entered the run).
     """
     runs, carriers = state.status.shape
     scale = params.time_scale
+    end = np.where(state.ended_at >= 0, state.ended_at, state.tick)
+    keep = (state.due <= end[:, None]).reshape(-1)  # warehouse orders due later are not in the run
+
+    def column(values: np.ndarray) -> np.ndarray:
+        return values.reshape(-1)[keep]
 
     def times(ticks: Int) -> np.ndarray:
-        return np.where(ticks >= 0, ticks.astype(np.float64) * scale, np.nan).reshape(-1)
+        return column(np.where(ticks >= 0, ticks.astype(np.float64) * scale, np.nan))
 
+    rows = int(keep.sum())
     return CarrierLog(
-        condition=np.full(runs * carriers, params.condition),
-        run=np.repeat(state.run_ids, carriers),
-        seed=np.full(runs * carriers, seed, dtype=np.int64),
-        carrier=np.tile(params.markers, runs),
-        urgency0=state.urgency0.reshape(-1).astype(np.int64),
-        order_time=state.order_time.reshape(-1) * scale + 0.0,
+        condition=np.full(rows, params.condition),
+        run=column(np.repeat(state.run_ids, carriers)),
+        seed=np.full(rows, seed, dtype=np.int64),
+        carrier=column(np.tile(params.markers, runs)),
+        urgency0=column(state.urgency0).astype(np.int64),
+        order_time=column(state.order_time) * scale + 0.0,
         pickup_time=times(state.pickup_time),
         delivery_time=times(state.delivery_time),
-        robot=state.deliverer.reshape(-1),
-        run_end=np.repeat(
-            times(np.where(state.ended_at >= 0, state.ended_at, state.tick)), carriers
-        ),
-        urgency_end=np.where(state.delivery_urgency >= 0, state.delivery_urgency, state.urgency)
-        .reshape(-1)
-        .astype(np.int64),
+        robot=column(state.deliverer),
+        run_end=times(np.repeat(end, carriers)),
+        urgency_end=column(
+            np.where(state.delivery_urgency >= 0, state.delivery_urgency, state.urgency)
+        ).astype(np.int64),
         time_unit=params.scenario.time_unit,
     )
 
@@ -163,6 +168,8 @@ def _result(
 ) -> SimResult:
     """The ``SimResult`` of a finished batch, whichever backend ran it."""
     delivered = (state.delivery_time >= 0).sum(axis=1)
+    end = np.where(state.ended_at >= 0, state.ended_at, state.tick)
+    orders = (state.due <= end[:, None]).sum(axis=1)  # every carrier in the lab
     stuck = (
         (state.status == TagStatus.PICKED_UP)
         & (state.carried_by >= 0)
@@ -179,7 +186,7 @@ def _result(
         ),
         run_ids=state.run_ids.copy(),
         delivered=delivered.astype(np.int64),
-        undelivered=(params.carriers - delivered).astype(np.int64),
+        undelivered=(orders - delivered).astype(np.int64),
         stuck=stuck.astype(np.int64),
         breakdowns=breakdowns,
         end_tick=np.where(state.ended_at >= 0, state.ended_at, state.tick),
@@ -276,13 +283,14 @@ def seeded_state(
 ) -> WorldState:
     """The start state of global runs ``run_offset .. run_offset + runs - 1`` of ``seed``.
 
-    ``backend="fast"`` samples the scenes with the compiled sampler (the same scenes).
+    ``backend="fast"`` samples the scenes with the compiled sampler (the same scenes);
+    warehouse scenes come from the reference sampler for both backends.
     """
     seed = check_seed(seed)
     runs = check_int("runs", runs, low=1, high=MAX_RUN_INDEX)
     run_offset = check_int("run_offset", run_offset, low=0, high=MAX_RUN_INDEX - runs)
     run_ids = np.arange(run_offset, run_offset + runs, dtype=np.int64)
-    if check_choice("backend", backend, BACKENDS) == "fast":
+    if check_choice("backend", backend, BACKENDS) == "fast" and params.floor is None:
         from swarmtag.sim.fast import seeded_scenes  # noqa: PLC0415 - numba is an extra
 
         scenes = seeded_scenes(params, seed=seed, run_ids=run_ids.tolist())

@@ -37,6 +37,7 @@ from swarmtag.sim.groups import (
     Walk,
 )
 from swarmtag.sim.sensors import PERCEPTION_MODELS, Camera, Radio
+from swarmtag.sim.warehouse import Warehouse, floor_of
 
 __all__ = ["MAX_CARRIERS", "MAX_ROBOTS", "MAX_TICK", "MIN_TICK", "TIME_UNITS", "Scenario"]
 
@@ -101,6 +102,7 @@ class Scenario:
     urgency: UrgencyModel = field(default_factory=UrgencyModel)
     realism: Realism = field(default_factory=Realism)
     reprioritisations: tuple[Reprioritisation, ...] = ()
+    warehouse: Warehouse | None = None
 
     def __post_init__(self) -> None:
         robots = check_int("robots", self.robots, low=1, high=MAX_ROBOTS)
@@ -143,6 +145,8 @@ class Scenario:
                 msg = f"reprioritisations: {event!r} is not a Reprioritisation"
                 raise ConfigError(msg)
         object.__setattr__(self, "reprioritisations", events)
+        if self.warehouse is not None:
+            self._order_capacity()
         self._check_durations()
         self._check_geometry()
         self._check_events()
@@ -242,25 +246,44 @@ class Scenario:
         """Ticks a run lasts at most: ``ticks`` (growing) or the static time limit."""
         return self.ticks if self.urgency.model == "growing" else self.urgency.static_time_limit
 
+    def _order_capacity(self) -> None:
+        """A warehouse: check its part and pre-allocate its orders as the carriers."""
+        given: object = self.warehouse
+        if not isinstance(given, Warehouse):
+            msg = f"warehouse: {given!r} is not a Warehouse"
+            raise ConfigError(msg)
+        if self.urgency.model != "growing":
+            msg = (
+                f"urgency.model: {self.urgency.model!r}; a warehouse's orders use the growing "
+                "model (their urgency rises while they wait)"
+            )
+            raise ConfigError(msg)
+        if self.reprioritisations:
+            msg = (
+                "reprioritisations: not available in a warehouse (its carriers are orders "
+                "that arrive during the run); leave them out or use the lab arena"
+            )
+            raise ConfigError(msg)
+        object.__setattr__(self, "carriers", given.order_capacity(self.ticks * self.tick))
+
     def _check_geometry(self) -> None:
         arena, bodies, motion = self.area, self.bodies, self.motion
-        radius = bodies.robot_diameter / 2
+        if self.warehouse is not None:
+            self._check_motion()
+            self.warehouse.check_floor(
+                floor_of(self.warehouse),
+                robots=self.robots,
+                carrier_size=bodies.carrier_size,
+                spacing=arena.carrier_spacing,
+                largest_margin=max(bodies.robot_diameter, bodies.carrier_size) / 2,
+                step=motion.speed * self.tick,
+            )
+            return
+        self._check_motion()
         if arena.carrier_spacing < bodies.robot_diameter:
             msg = (
                 f"arena.carrier_spacing: {arena.carrier_spacing!r} is less than the robot "
                 f"diameter {bodies.robot_diameter!r}; a robot must fit between two carriers"
-            )
-            raise ConfigError(msg)
-        if motion.predock_distance <= radius:
-            msg = (
-                f"motion.predock_distance: {motion.predock_distance!r} is not more than the "
-                f"robot radius {radius!r}; the robot must stand clear of the carrier face"
-            )
-            raise ConfigError(msg)
-        if motion.speed * self.tick > radius:
-            msg = (
-                f"motion.speed: {motion.speed!r} m/s moves more than the robot radius per tick "
-                f"({self.tick!r} s); use a shorter tick or a lower speed"
             )
             raise ConfigError(msg)
         largest = max(bodies.robot_diameter, bodies.carrier_size)
@@ -286,6 +309,22 @@ class Scenario:
             msg = (
                 f"robots: {self.robots} do not fit in the drop-off area where they start "
                 f"(at most {room}); widen arena.dropoff_width or use fewer robots"
+            )
+            raise ConfigError(msg)
+
+    def _check_motion(self) -> None:
+        """The predock stand-off clears the robot, and a tick's step is under its radius."""
+        motion, radius = self.motion, self.bodies.robot_diameter / 2
+        if motion.predock_distance <= radius:
+            msg = (
+                f"motion.predock_distance: {motion.predock_distance!r} is not more than the "
+                f"robot radius {radius!r}; the robot must stand clear of the carrier face"
+            )
+            raise ConfigError(msg)
+        if motion.speed * self.tick > radius:
+            msg = (
+                f"motion.speed: {motion.speed!r} m/s moves more than the robot radius per tick "
+                f"({self.tick!r} s); use a shorter tick or a lower speed"
             )
             raise ConfigError(msg)
 

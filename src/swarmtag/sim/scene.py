@@ -21,6 +21,9 @@ scene in every condition:
 6. ``rng.random(C)``: each tag's advertising phase, as a fraction of the
    advertising interval (drawn last, so the draws above are those of the
    simulator before it had phases).
+
+A warehouse scene (orders, robots on the floor) is sampled by
+``swarmtag.sim.orders.sample_warehouse_scene`` from the same stream.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ import numpy as np
 
 from swarmtag.errors import ConfigError
 from swarmtag.sim.geometry import Float, length
+from swarmtag.sim.orders import sample_warehouse_scene
 from swarmtag.sim.params import Params
 from swarmtag.sim.randomness import Stream, stream, unit_vectors
 from swarmtag.sim.state import Scene
@@ -82,6 +86,8 @@ def crowded(what: str) -> ConfigError:
 def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
     """The initial scene of global run ``run`` of master seed ``seed``."""
     rng = stream(seed, run, Stream.SCENE)
+    if params.floor is not None:
+        return sample_warehouse_scene(params, rng)
     half, radius, arena = params.carrier_half, params.robot_radius, params.arena
     pitch = 2 * half + params.carrier_spacing
 

@@ -146,6 +146,17 @@ class WorldState:
     """(R,) tick at which the run ended (all carriers delivered or time limit); -1 running."""
     operator_counter: Int
     """(R,) the last counter the run's operator (WMS) signed a write with; -1 none yet."""
+    # orders (warehouses; in the lab every carrier is due at 0, destination 0, no slot)
+    due: Int
+    """(R, C) tick at which the order enters the pick-up queue (0: waiting at the start)."""
+    arrival_time: Int
+    """(R, C) tick at which the carrier was placed in the pick-up area; -1 not yet."""
+    destination: Int
+    """(R, C) the drop-off area to deliver to, as an index into the floor map's destinations."""
+    slot: Int
+    """(R, C) pick-up slot the carrier was placed on; -1 none (the lab places freely)."""
+    slot_pick: Float
+    """(R, C) uniform number in [0, 1) choosing the order's slot among the free ones."""
 
     @property
     def runs(self) -> int:
@@ -201,6 +212,14 @@ class Scene:
     speed_factor: Float
     status: NDArray[np.int8]
     advert_phase: Float
+    due: Int | None = None
+    """Warehouse orders: tick each enters the pick-up queue (None: all 0, present at start)."""
+    destination: Int | None = None
+    """Drop-off area of each carrier, an index into the floor's destinations (None: all 0)."""
+    slot: Int | None = None
+    """Pick-up slot of each carrier present at the start (None or -1: placed freely)."""
+    slot_pick: Float | None = None
+    """Uniform numbers choosing each later order's slot (None: all 0)."""
 
     @classmethod
     def build(
@@ -276,6 +295,11 @@ def _check_scene(scene: Scene, params: Params, position: int) -> None:
         if actual != shape:
             msg = f"{where}: {name} has shape {actual}, the scenario needs {shape}"
             raise ConfigError(msg)
+    for name in ("due", "destination", "slot", "slot_pick"):
+        given = getattr(scene, name)
+        if given is not None and np.shape(given) != (c,):
+            msg = f"{where}: {name} has shape {np.shape(given)}, the scenario needs {(c,)}"
+            raise ConfigError(msg)
     if not np.all(np.abs(length(scene.heading) - 1.0) < 1e-9):
         msg = f"{where}: heading must hold unit vectors"
         raise ConfigError(msg)
@@ -305,11 +329,21 @@ def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -
     def stack(name: str, dtype: type) -> NDArray[Any]:
         return np.stack([np.asarray(getattr(s, name), dtype=dtype) for s in scenes])
 
+    def orders(name: str, default: float, dtype: type) -> NDArray[Any]:
+        rows: list[NDArray[Any]] = [
+            np.full(c, default, dtype=dtype)
+            if getattr(s, name) is None
+            else np.asarray(getattr(s, name), dtype=dtype)
+            for s in scenes
+        ]
+        return np.stack(rows).reshape(runs, c)
+
     carrier_pos = stack("carrier_pos", np.float64).reshape(runs, c, 2)
     status = stack("status", np.int8).reshape(runs, c)
     urgency0 = stack("urgency0", np.int8).reshape(runs, c)
     heading = stack("heading", np.float64).reshape(runs, n, 2)
-    present = np.ones((runs, c), dtype=bool)
+    due = orders("due", 0, np.int64)
+    present = due == 0
     slots = params.status_delay + 1
 
     def robots(value: int) -> Int:
@@ -361,4 +395,9 @@ def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -
         delivery_urgency=np.full((runs, c), -1, dtype=np.int8),
         ended_at=np.full(runs, -1, dtype=np.int64),
         operator_counter=np.full(runs, -1, dtype=np.int64),
+        due=due,
+        arrival_time=np.where(present, 0, -1).astype(np.int64),
+        destination=orders("destination", 0, np.int64),
+        slot=orders("slot", -1, np.int64),
+        slot_pick=orders("slot_pick", 0.0, np.float64),
     )

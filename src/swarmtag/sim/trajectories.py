@@ -46,6 +46,17 @@ class Geometry:
     carrier_size: float
     tick_seconds: float
     radio_range: float = 0.0
+    height: float = 0.0
+    """The arena's extent in y; 0: square (``arena``)."""
+    floor_text: str = ""
+    """A warehouse's map (``FloorMap.text``: lines, top first); empty in the lab arena."""
+    floor_cell: float = 0.0
+    """Side of one map cell, metres (warehouse only)."""
+
+    @property
+    def extent_y(self) -> float:
+        """The arena's extent in y."""
+        return self.height or self.arena
 
     @classmethod
     def from_params(cls, params: Params) -> Geometry:
@@ -59,6 +70,9 @@ class Geometry:
             carrier_size=2 * params.carrier_half,
             tick_seconds=params.scenario.tick,
             radio_range=params.radio_range if params.split else 0.0,
+            height=params.arena_height,
+            floor_text="" if params.floor is None else params.floor.text,
+            floor_cell=0.0 if params.floor is None else params.floor.cell,
         )
 
 
@@ -115,13 +129,13 @@ class Trajectories:
                 if "format" not in data or str(data["format"]) != _FORMAT:
                     msg = f"{where}: not a swarmtag trajectories file ({_FORMAT})"
                     raise ConfigError(msg)
-                geometry = Geometry(
-                    **{
-                        f.name: float(data[f"geometry.{f.name}"])
-                        for f in fields(Geometry)
-                        if f"geometry.{f.name}" in data or f.default is MISSING
-                    }
-                )
+                given = {
+                    f.name: data[f"geometry.{f.name}"]
+                    for f in fields(Geometry)
+                    if f"geometry.{f.name}" in data or f.default is MISSING
+                }
+                text = str(given.pop("floor_text", ""))
+                geometry = Geometry(**{k: float(v) for k, v in given.items()}, floor_text=text)
                 arrays = {f.name: data[f.name] for f in fields(cls) if f.name not in _SCALARS}
                 return cls(
                     geometry=geometry,

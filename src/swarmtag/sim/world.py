@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.errors import SimulationError
-from swarmtag.sim._index import at_robots, is_loaded
+from swarmtag.sim._index import at_robots, in_dropoff, is_loaded
 from swarmtag.sim.broad_phase import first_claims
 from swarmtag.sim.control import Arrivals, Carrying, LiftAnswers
 from swarmtag.sim.events import EventKind, TickEvents
@@ -126,7 +126,7 @@ def deliver(
             msg = f"tick {t}: a robot released a carrier whose tag is not PICKED_UP"
             raise SimulationError(msg)
         holder = at_robots(s.carried_by, carrying.lower)
-        inside = s.robot_pos[..., 0] - params.carrier_half >= params.dropoff_left
+        inside = in_dropoff(s, params, carrying.lower)
         robots = np.arange(s.mode.shape[1])[None, :]
         if not ((holder == robots) & inside)[done].all():
             msg = (

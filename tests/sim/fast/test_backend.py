@@ -72,7 +72,8 @@ def test_full_event_buffers_pause_runs_without_changing_them(monkeypatch):
     busy = replace(SCENARIO, ticks=3000, realism=Realism(breakdown=0.0005))
     whole = simulate(busy, Urgency(alpha=0.7), seed=1, runs=3, backend="fast")
     # room for one tick's events only: a run pauses after every tick that had events
-    monkeypatch.setattr(fast_runner, "_capacity", lambda robots: EVENT_SLOTS * robots)
+    room = lambda robots, slots: EVENT_SLOTS * (robots + slots)  # noqa: E731
+    monkeypatch.setattr(fast_runner, "_capacity", room)
     paused = simulate(busy, Urgency(alpha=0.7), seed=1, runs=3, backend="fast")
     assert_same(whole, paused)
     for run in range(3):  # events in many ticks: every run paused again and again

@@ -36,6 +36,13 @@ PAPER = replace(Scenario.default(3, 7), ticks=1500)
 LAB = Scenario.default(3, 7, profile="lab")
 BASE = replace(Scenario.default(3, 7, profile="base"), ticks=1200)
 
+
+def warehouse(robots: int, ticks: int, **part: object) -> Scenario:
+    """A warehouse on the lab profile (seconds, the calibrated handling times)."""
+    lab = LAB.to_mapping()
+    return Scenario.from_mapping({**lab, "robots": robots, "ticks": ticks, "warehouse": part})
+
+
 CASES = {
     "paper-sim": PAPER,
     "paper-sim-5x10": replace(Scenario.default(5, 10), ticks=800),
@@ -80,13 +87,27 @@ CASES = {
         PAPER, timing=Timing(dock=0.0, lift=0.0, release=0.0, pursuit_timeout=2.0, cooldown=1.0)
     ),
     "crowded-20x40": replace(Scenario.default(20, 40), ticks=400),
+    "warehouse": warehouse(8, 1500, order_interval=12.0, initial_orders=6),
 }
+HALL = replace(
+    warehouse(30, 1800, map="warehouse-hall", order_interval=3.0, initial_orders=20),
+    realism=Realism(status_delay=3, advertisement_loss=0.1, speed_variation=0.2),
+)
+"""The large map, with realism: one policy (``test_warehouses_place_orders_and_deliver``)."""
 
 
 @pytest.mark.parametrize("policy", POLICIES, ids=lambda p: p.name)
 @pytest.mark.parametrize("case", list(CASES))
 def test_backends_agree(case, policy):
     compare(CASES[case], policy, seed=11, runs=4, run_offset=3)
+
+
+@pytest.mark.parametrize(("scenario", "runs"), [(CASES["warehouse"], 4), (HALL, 2)])
+def test_warehouses_place_orders_and_deliver(scenario, runs):
+    # the warehouse cases only test the warehouse if orders arrive and robots deliver them
+    result = compare(scenario, Urgency(alpha=0.7), seed=11, runs=runs, run_offset=3)
+    assert (result.events.kind == "arrive").sum() > 0
+    assert result.delivered.sum() > 0
 
 
 def test_hundreds_of_runs_agree():
@@ -97,8 +118,9 @@ def test_hundreds_of_runs_agree():
     assert result.delivered.sum() > 0
 
 
-def test_recorded_and_checked_runs_agree():
-    reference = compare(PAPER, Urgency(alpha=3.0), seed=2, runs=2, record=True, check=True)
+@pytest.mark.parametrize("scenario", [PAPER, CASES["warehouse"]], ids=["lab", "warehouse"])
+def test_recorded_and_checked_runs_agree(scenario):
+    reference = compare(scenario, Urgency(alpha=3.0), seed=2, runs=2, record=True, check=True)
     assert reference.trajectories is not None
 
 
@@ -165,8 +187,9 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         replace(LARGE, camera=Camera(range=0.3, occlusion="carriers+robots", memory=2.0)),
         replace(LARGE, perception="disc", detection_radius=2.0),
         replace(LARGE, realism=Realism(advertisement_loss=0.2, detection_noise=0.02)),
+        warehouse(120, 200, map="warehouse-hall", order_interval=0.5, initial_orders=40),
     ],
-    ids=["grids", "robots-occlude", "memory", "disc", "realism"],
+    ids=["grids", "robots-occlude", "memory", "disc", "realism", "warehouse"],
 )
 def test_large_swarms_agree(scenario):
     compare(scenario, Urgency(alpha=3.0), seed=21, runs=2)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from swarmtag.sim.fast._decide import to_walk
 from swarmtag.sim.fast._events import emit
+from swarmtag.sim.fast._floor import clear_of_shelves, in_dropoff
 from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, contact, maximum, minimum, norm
 from swarmtag.sim.fast._grid import near
 from swarmtag.sim.fast._index import index_obstacles
@@ -162,10 +163,12 @@ def carry_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -
             w.mode[r, n] = _TRANSPORT
             w.stuck[r, n] = 0
             w.sidestep[r, n] = 0
-            y = minimum(maximum(w.robot_pos[r, n, 1], k.carrier_half), k.arena - k.carrier_half)
-            w.goal[r, n, 0] = k.transport_x
-            w.goal[r, n, 1] = y
-        if w.mode[r, n] == _TRANSPORT and w.robot_pos[r, n, 0] - k.carrier_half >= k.dropoff_left:
+            if not k.has_floor:
+                high = k.arena - k.carrier_half
+                y = minimum(maximum(w.robot_pos[r, n, 1], k.carrier_half), high)
+                w.goal[r, n, 0] = k.transport_x
+                w.goal[r, n, 1] = y
+        if w.mode[r, n] == _TRANSPORT and in_dropoff(r, n, w.target[r, n], w, k):
             w.mode[r, n] = _RELEASE
             w.timer[r, n] = k.release_ticks
         x.lower[r, n] = -1
@@ -218,7 +221,10 @@ def free_faces_run(r: int, w: World, k: Constants, x: Scratch) -> None:
         for face in range(4):
             px = cx + FACE_X[face] * k.predock_offset
             py = cy + FACE_Y[face] * k.predock_offset
-            free = low <= px <= high and low <= py <= high
+            if k.has_floor:
+                free = clear_of_shelves(px, py, k.robot_radius, k)
+            else:
+                free = low <= px <= high and low <= py <= high
             w.free_face[r, c, face] = free and _clear_of_obstacles(r, c, px, py, k, x)
 
 
@@ -235,7 +241,7 @@ def deliver_run(r: int, t: int, lifted: bool, w: World, k: Constants, x: Scratch
         if w.status[r, c] != _PICKED_UP:
             x.failure[r] = FAILURE_NOT_PICKED_UP
             continue
-        if w.carried_by[r, c] != n or not w.robot_pos[r, n, 0] - k.carrier_half >= k.dropoff_left:
+        if w.carried_by[r, c] != n or not in_dropoff(r, n, c, w, k):
             x.failure[r] = FAILURE_LOWERED
             continue
         w.status[r, c] = _IDLE

@@ -91,6 +91,11 @@ class World(NamedTuple):
     delivery_urgency: S1
     ended_at: I8
     operator_counter: I8
+    due: I8
+    arrival_time: I8
+    destination: I8
+    slot: I8
+    slot_pick: F8
 
 
 class Constants(NamedTuple):
@@ -146,6 +151,22 @@ class Constants(NamedTuple):
     """Find each robot's neighbours with the grid (many robots) rather than a scan."""
     sight_cell: float
     """Side of a coarse grid cell: the camera's range (at least ``grid_cell``)."""
+    arena_height: float
+    has_floor: bool
+    """A warehouse floor (the ``floor_*`` arrays and ``pickup_slots``); else the lab arena."""
+    floor_cell: float
+    floor_rows: int
+    floor_cols: int
+    floor_blocked: B1
+    """(rows + 2, cols + 2) shelves and the wall around (``FloorMap.blocked``)."""
+    floor_area: I8
+    """(rows, cols) drop-off area id of each cell, -1 none."""
+    floor_waypoint: F8
+    """(D, rows, cols, 2) the next waypoint towards each destination."""
+    floor_destinations: I8
+    """(D,) the destination (area) ids."""
+    pickup_slots: F8
+    """(K, 2) the pick-up slots' centres (one dummy slot in the lab arena)."""
 
 
 class Scratch(NamedTuple):
@@ -233,6 +254,8 @@ class Scratch(NamedTuple):
     """(R, C) obstacles a line-of-sight query found (any order)."""
     near_robots: I8
     """(R, N) robots a query around a point or a line of sight found (any order)."""
+    free_slots: I8
+    """(R, K) the pick-up slots free for an order, ascending (warehouse)."""
 
     slot_on: B1
     slot_carrier: I8
@@ -254,8 +277,26 @@ def policy_code(params: Params) -> tuple[int, float]:
 
 
 def constants_of(params: Params) -> Constants:
-    """The kernel's constants for ``params``."""
+    """The kernel's constants for ``params`` (writable copies of the floor's arrays).
+
+    The lab arena gets one-cell dummies of the same types, so both compile to one kernel.
+    """
     kind, parameter = policy_code(params)
+    floor = params.floor
+    if floor is None:
+        blocked = np.zeros((3, 3), dtype=bool)
+        area = np.full((1, 1), -1, dtype=np.int64)
+        waypoint = np.zeros((1, 1, 1, 2))
+        destinations = np.zeros(1, dtype=np.int64)
+        slots = np.zeros((1, 2))
+        floor_cell, rows, cols = 1.0, 1, 1
+    else:
+        blocked = np.array(floor.blocked, dtype=bool)
+        area = np.array(floor.area, dtype=np.int64)
+        waypoint = np.array(floor.waypoint, dtype=np.float64)
+        destinations = np.array(floor.destinations, dtype=np.int64)
+        slots = np.array(floor.pickup_slots, dtype=np.float64)
+        floor_cell, rows, cols = floor.cell, floor.rows, floor.cols
     half, radius = params.carrier_half, params.robot_radius
     cell = max(2 * half, half + radius, 2 * radius)
     sight = max(cell, params.camera_range)
@@ -304,6 +345,16 @@ def constants_of(params: Params) -> Constants:
         obstacle_grid=params.carriers > GRID_FROM,
         robot_grid=params.robots > GRID_FROM,
         sight_cell=sight,
+        arena_height=params.arena_height,
+        has_floor=floor is not None,
+        floor_cell=floor_cell,
+        floor_rows=rows,
+        floor_cols=cols,
+        floor_blocked=blocked,
+        floor_area=area,
+        floor_waypoint=waypoint,
+        floor_destinations=destinations,
+        pickup_slots=slots,
     )
 
 
@@ -323,7 +374,9 @@ def state_of(world: World, template: WorldState) -> WorldState:
     return replace(template, tick=tick, **arrays)
 
 
-def scratch_for(runs: int, robots: int, carriers: int, capacity: int, gridded: bool) -> Scratch:
+def scratch_for(
+    runs: int, robots: int, carriers: int, capacity: int, gridded: bool, slots: int = 1
+) -> Scratch:
     """Working space for ``runs`` runs: event buffers of ``capacity`` rows, hash tables.
 
     The tables (``_grid``) get their full size only where a grid is used (``gridded``).
@@ -392,6 +445,7 @@ def scratch_for(runs: int, robots: int, carriers: int, capacity: int, gridded: b
         near_carriers=np.zeros(c, dtype=np.int64),
         near_blockers=np.zeros(c, dtype=np.int64),
         near_robots=np.zeros(n, dtype=np.int64),
+        free_slots=np.zeros((runs, slots), dtype=np.int64),
         slot_on=np.zeros((*n, EVENT_SLOTS), dtype=bool),
         slot_carrier=np.zeros((*n, EVENT_SLOTS), dtype=np.int64),
         slot_value=np.zeros((*n, EVENT_SLOTS)),

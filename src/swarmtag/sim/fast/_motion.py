@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from swarmtag.sim.fast._floor import cell_of, keep_off_shelves, waypoint_of
 from swarmtag.sim.fast._geometry import (
     FACE_X,
     FACE_Y,
@@ -46,6 +47,10 @@ def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
         target = max(w.target[r, n], 0)
         nx = FACE_X[face]
         ny = FACE_Y[face]
+        if k.has_floor and mode == _TRANSPORT:  # the next waypoint of the path to its area
+            goal_x, goal_y = waypoint_of(px, py, w.destination[r, target], k)
+            w.goal[r, n, 0] = goal_x
+            w.goal[r, n, 1] = goal_y
         if mode == _WALK:
             qx = px + w.walk[r, n, 0] * speed
             qy = py + w.walk[r, n, 1] * speed
@@ -246,9 +251,13 @@ def _collision_pass(r: int, count: int, w: World, k: Constants, x: Scratch) -> i
                     r, n, xn, yn, x.gathered, x.obstacle_count[r], False, w, k, x
                 )
         margin = extent + radius
-        high = k.arena - margin
-        x.new_x[r, n] = minimum(maximum((xn + robot_x) + carrier_x, margin), high)
-        x.new_y[r, n] = minimum(maximum((yn + robot_y) + carrier_y, margin), high)
+        new_x = minimum(maximum((xn + robot_x) + carrier_x, margin), k.arena - margin)
+        new_y = minimum(maximum((yn + robot_y) + carrier_y, margin), k.arena_height - margin)
+        if k.has_floor:
+            row, col = cell_of(x.before_pos[r, n, 0], x.before_pos[r, n, 1], k)
+            new_x, new_y = keep_off_shelves(new_x, new_y, extent, radius, row, col, k)
+        x.new_x[r, n] = new_x
+        x.new_y[r, n] = new_y
     for j in range(count):  # Jacobi: every new position from the pass's start
         n = x.active[r, j] if k.robot_grid else j
         if x.new_x[r, n] != x.x[r, n] or x.new_y[r, n] != x.y[r, n]:

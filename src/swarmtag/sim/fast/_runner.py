@@ -66,9 +66,12 @@ def kernel_compiled() -> bool:
         return True
 
 
-def _capacity(robots: int) -> int:
-    """Rows of each run's event buffer (a run pauses when a tick could overflow it)."""
-    return max(256, 4 * EVENT_SLOTS * robots)
+def _capacity(robots: int, slots: int) -> int:
+    """Rows of each run's event buffer (a run pauses when a tick could overflow it).
+
+    A tick makes at most ``EVENT_SLOTS`` rows per robot and one arrival per pick-up slot.
+    """
+    return max(256, 4 * EVENT_SLOTS * (robots + slots))
 
 
 def default_threads() -> int:
@@ -187,8 +190,9 @@ class _Batch:
             runs,
             robots,
             params.carriers,
-            capacity=_capacity(robots),
+            capacity=_capacity(robots, k.pickup_slots.shape[0]),
             gridded=gridded,
+            slots=k.pickup_slots.shape[0],
         )
         self.streams = _Streams(params, seed, [int(run) for run in state.run_ids])
         self.events = EventRecorder()

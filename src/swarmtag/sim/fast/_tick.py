@@ -30,6 +30,7 @@ from swarmtag.sim.fast._index import index_obstacles, index_robots
 from swarmtag.sim.fast._jit import counted, inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 from swarmtag.sim.fast._motion import move_robots, resolve_run
+from swarmtag.sim.fast._orders import place_orders_run
 from swarmtag.sim.fast._sense import sense_robots, tags_advertising
 
 __all__ = ["advance", "tick_run"]
@@ -83,12 +84,12 @@ def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
     remaining = False
     for c in range(k.carriers):
         w0 = w.w0[r, c]
-        if not math.isnan(w0):
+        if not math.isnan(w0) and w.arrival_time[r, c] >= 0:
             grown = math.floor(9.0 * (w0 + t) / k.horizon)
             w.urgency[r, c] = min(9, grown)
         w.adv_status[r, slot, c] = w.status[r, c]
         w.adv_urgency[r, slot, c] = w.urgency[r, c]
-        if w.present[r, c]:
+        if w.present[r, c] or w.arrival_time[r, c] < 0:  # on the floor, or still to come
             remaining = True
     if w.ended_at[r] < 0 and (not remaining or t >= k.run_ticks):
         w.ended_at[r] = t
@@ -133,6 +134,7 @@ def tick_run(
     carry_robots(r, 0, robots, w, k, x)
     deliver_run(r, t, lifted, w, k, x)
     _end_of_tick(r, t, w, k)
+    place_orders_run(r, t, w, k, x)
     flush_slots(r, t, robots, x)
 
 
@@ -152,7 +154,7 @@ def _run_to(
 ) -> None:
     """Run ``r`` tick by tick to ``until``, its end, or a full event buffer."""
     while w.ended_at[r] < 0 and w.run_tick[r] < until and x.failure[r] == 0:
-        if not room_for_tick(r, k.robots, x):
+        if not room_for_tick(r, k.robots + k.pickup_slots.shape[0], x):
             return
         t = w.run_tick[r] + 1
         row = t - turns_from if k.walk_turn_ticks > 0 else 0
