@@ -12,7 +12,7 @@ from swarmtag.io import format_csv
 from swarmtag.io.bags import read_bag
 from swarmtag.policy import Proximity
 from swarmtag.sim import Reprioritisation, simulate
-from swarmtag.sim.mcap import write_mcap
+from swarmtag.sim.mcap import _floor_cells, write_mcap
 from swarmtag.sim.profiles import load_profile
 
 pytest.importorskip("rosbags")
@@ -96,3 +96,39 @@ def test_a_run_not_recorded_is_refused(recorded, tmp_path):
             tmp_path / "run.mcap", recorded.trajectories, recorded.carriers, recorded.events, run=9
         )
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_warehouse_run_round_trips(tmp_path):
+    lab = load_profile("lab").scenario({"robots": 6, "ticks": 3000})
+    part = {"map": "small-warehouse", "order_interval": 30.0, "initial_orders": 6}
+    warehouse = type(lab).from_mapping({**lab.to_mapping(), "warehouse": part})
+    result = simulate(warehouse, Proximity(), seed=4, runs=1, record=True)
+    assert result.delivered[0] > 0
+    assert (result.events.kind == "arrive").sum() > 0
+    path = tmp_path / "warehouse.mcap"
+    write_mcap(path, result.trajectories, result.carriers, result.events, run=0)
+    logs = read_bag(path, with_events=True)
+    assert format_csv(logs.carriers) == format_csv(result.carriers)
+    assert logs.events == result.events
+
+
+def test_the_scene_of_a_warehouse_holds_its_shelves_and_areas():
+    lab = load_profile("lab").scenario({"robots": 2, "ticks": 10})
+    warehouse = type(lab).from_mapping({**lab.to_mapping(), "warehouse": {}})
+    geometry = simulate(warehouse, Proximity(), seed=0, runs=1, record=True).trajectories.geometry
+    cells = _floor_cells(geometry)
+    text = geometry.floor_text
+    kinds = [kind for kind, *_ in cells]
+    assert kinds.count("shelf") == text.count("#")
+    assert kinds.count("pickup") == text.count("P")
+    assert kinds.count("dropoff") == sum(text.count(d) for d in "0123456789")
+    lines = text.splitlines()  # the first line is the top row
+    assert ("shelf", 5 * 0.75, (len(lines) - 1 - 2) * 0.75, 0.75) in cells
+    assert lines[2][5] == "#"
+    assert _floor_cells(recorded_lab_geometry()) == ()
+
+
+def recorded_lab_geometry():
+    return simulate(
+        scenario("tick"), Proximity(), seed=0, runs=1, record=True
+    ).trajectories.geometry

@@ -406,8 +406,13 @@ def simulate_cmd(
         for note in notes:
             click.echo(f"wrote {note}", err=True)
         return
+    bodies = (
+        f"{scenario.carriers} carriers"
+        if scenario.warehouse is None
+        else scenario.warehouse.summary()
+    )
     console.print(
-        f"{scenario.robots} robots, {scenario.carriers} carriers, "
+        f"{scenario.robots} robots, {bodies}, "
         f"{scenario.run_ticks} ticks of {scenario.tick:g} s ({scenario.urgency.model} urgency), "
         f"{scenario.perception_summary()}, profile {profile}, {runs} runs "
         f"from run {run_offset}, seed {seed}"

@@ -62,6 +62,14 @@ _AWAITING, _PICKED_UP = 1, 2
 _ROBOT_HEIGHT, _CARRIER_HEIGHT, _LIFTED = 0.12, 0.06, 0.16
 _ARROW, _CUBE, _CYLINDER, _TEXT = 0, 1, 3, 9  # visualization_msgs/msg/Marker types
 _DELETE_ALL = 3  # Marker action: remove the markers of the previous time step
+_PICKUP_RGBA: Final = (0.80, 0.92, 0.80, 1.0)
+_DROPOFF_RGBA: Final = (0.80, 0.86, 0.97, 1.0)
+_CELL_LOOK: Final = {
+    "shelf": ((0.45, 0.45, 0.45, 1.0), 0.5, 1.0),
+    "pickup": (_PICKUP_RGBA, -0.003, 0.004),
+    "dropoff": (_DROPOFF_RGBA, -0.003, 0.004),
+}
+"""A warehouse cell's colour, height of its centre and thickness: shelves stand 1 m tall."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,6 +81,11 @@ class Arena:
     dropoff_left: float
     robot_radius: float
     carrier_size: float
+    height: float = 0.0
+    """Extent in y (0: square, ``size``)."""
+    cells: tuple[tuple[str, float, float, float], ...] = ()
+    """A warehouse's cells instead of the lab's two areas: (kind, x, y, side), kind
+    ``shelf``, ``pickup`` or ``dropoff``, (x, y) the lower left corner."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -289,23 +302,32 @@ class McapRecorder:
     def arena(self, at: int, arena: Arena) -> None:
         """The floor, the pick-up area (x <= pickup_right) and the drop-off area (once)."""
         header = self._header(at, FRAME)
-        parts = (
-            ("floor", 0.0, arena.size, _rgba(0.93, 0.93, 0.93), -0.005),
-            ("pickup", 0.0, arena.pickup_right, _rgba(0.80, 0.92, 0.80), -0.003),
-            ("dropoff", arena.dropoff_left, arena.size, _rgba(0.80, 0.86, 0.97), -0.003),
-        )
-        markers = [
-            self._marker(
-                header,
-                name,
-                0,
-                shape=_CUBE,
-                pose=self._pose((left + right) / 2, arena.size / 2, z),
-                scale=(right - left, arena.size, 0.004),
-                colour=colour,
+        height = arena.height or arena.size
+        parts = [("floor", 0.0, 0.0, arena.size, height, _rgba(0.93, 0.93, 0.93), -0.005, 0.004)]
+        if not arena.cells:
+            parts += [
+                ("pickup", 0.0, 0.0, arena.pickup_right, height, _PICKUP_RGBA, -0.003, 0.004),
+                ("dropoff", arena.dropoff_left, 0.0, arena.size, height, _DROPOFF_RGBA, -0.003,
+                 0.004),
+            ]  # fmt: skip
+        for kind, x, y, side in arena.cells:
+            colour, z, tall = _CELL_LOOK[kind]
+            parts.append((kind, x, y, x + side, y + side, colour, z, tall))
+        counts: dict[str, int] = {}
+        markers = []
+        for name, left, low, right, high, colour, z, tall in parts:
+            number = counts[name] = counts.get(name, -1) + 1  # ids count within a namespace
+            markers.append(
+                self._marker(
+                    header,
+                    name,
+                    number,
+                    shape=_CUBE,
+                    pose=self._pose((left + right) / 2, (low + high) / 2, z),
+                    scale=(right - left, high - low, tall),
+                    colour=colour,
+                )
             )
-            for name, left, right, colour, z in parts
-        ]
         array = self._type("visualization_msgs/msg/MarkerArray")
         self._write("/swarmtag/arena", at, array(markers=markers))
 

@@ -46,6 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from swarmtag._checks import check_number
 from swarmtag._inputs import check_path, regular_file
+from swarmtag._resources import check_memory
 from swarmtag.errors import ConfigError
 from swarmtag.sim.groups import MAX_LENGTH
 
@@ -73,6 +74,10 @@ SHIPPED_MAPS: Final[tuple[str, ...]] = ("small-warehouse", "warehouse-hall")
 """Maps shipped in ``presets/maps/<name>.txt``."""
 MAX_MAP_SIDE: Final = 4096
 """Most map lines and most cells per line (routes for 4096 x 4096 cells take gigabytes)."""
+_BYTES_PER_CELL: Final = 300
+"""Peak bytes per cell of reading a map: the route graph's eight edges and Dijkstra's arrays."""
+_BYTES_PER_ROUTE: Final = 40
+"""Bytes per cell and destination: the waypoints (16) and the distances and predecessors."""
 
 _COMMENT: Final = ";"
 _CHARACTERS: Final = "# shelf, . floor, P pick-up, 0-9 drop-off"
@@ -208,6 +213,11 @@ def parse_floor_map(text: str, *, cell: float, name: str = "<map>") -> FloorMap:
     if not destinations:
         msg = f"{name}: the map has no drop-off cell (0-9); at least one is needed"
         raise ConfigError(msg)
+    check_memory(
+        f"{name}: a map of {kind.size} cells with {len(destinations)} destinations",
+        kind.size * (_BYTES_PER_CELL + _BYTES_PER_ROUTE * len(destinations)),
+        error=ConfigError,
+    )
     waypoint = _waypoints(kind, area, destinations, cell, where)
     rows, cols = kind.shape
     centres = (np.stack(np.nonzero(kind == PICKUP)[::-1], axis=1).astype(np.float64) + 0.5) * cell

@@ -23,7 +23,7 @@ from swarmtag.io import CarrierLog, EventTable
 from swarmtag.io.bag_trials import tick_nanoseconds
 from swarmtag.io.mcap_out import Arena, McapRecorder, TrialInfo
 from swarmtag.sim.state import Mode
-from swarmtag.sim.trajectories import Trajectories
+from swarmtag.sim.trajectories import Geometry, Trajectories
 from swarmtag.tag import TagStatus
 
 __all__ = ["write_mcap"]
@@ -37,6 +37,19 @@ def _run_rows(traj: Trajectories, run: int) -> int:
         msg = f"run: {run} was not recorded"
         raise ConfigError(msg)
     return int(matches[0])
+
+
+def _floor_cells(geometry: Geometry) -> tuple[tuple[str, float, float, float], ...]:
+    """A warehouse map's shelf, pick-up and drop-off cells for the 3-D scene (lab: none)."""
+    lines = geometry.floor_text.splitlines()
+    kinds = {"#": "shelf", "P": "pickup", **dict.fromkeys("0123456789", "dropoff")}
+    side = geometry.floor_cell
+    return tuple(
+        (kinds[char], column * side, (len(lines) - 1 - line) * side, side)
+        for line, text in enumerate(lines)
+        for column, char in enumerate(text)
+        if char in kinds
+    )
 
 
 def write_mcap(
@@ -62,10 +75,13 @@ def write_mcap(
         dropoff_left=geometry.dropoff_left,
         robot_radius=geometry.robot_radius,
         carrier_size=geometry.carrier_size,
+        height=geometry.extent_y,
+        cells=_floor_cells(geometry),
     )
     markers = log.carrier.tolist()
-    status = traj.carrier_status[row].astype(np.int64)
-    urgency = traj.carrier_urgency[row].astype(np.int64)
+    columns = np.asarray(markers, dtype=np.int64)  # a carrier's marker is its index in the run
+    status = traj.carrier_status[row][:, columns].astype(np.int64)
+    urgency = traj.carrier_urgency[row][:, columns].astype(np.int64)
     last = dict.fromkeys(markers, (-1, -1))
     trial = TrialInfo(
         condition=traj.condition,
@@ -127,10 +143,10 @@ def write_mcap(
                     for r, m in enumerate(traj.robot_mode[row, tick].tolist())
                 ],
                 markers=markers,
-                carrier_xy=traj.carrier_pos[row, tick],
+                carrier_xy=traj.carrier_pos[row, tick][columns],
                 carrier_status=status[tick].tolist(),
                 carrier_urgency=urgency[tick].tolist(),
-                carrier_present=traj.carrier_present[row, tick].tolist(),
+                carrier_present=traj.carrier_present[row, tick][columns].tolist(),
             )
             if tick == end_tick:
                 out.trial(at, trial, starts=False)

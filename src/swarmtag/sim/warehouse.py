@@ -83,6 +83,18 @@ class Warehouse:
         initial = check_int("warehouse.initial_orders", self.initial_orders, low=0, high=MAX_ORDERS)
         object.__setattr__(self, "initial_orders", initial)
 
+    def summary(self) -> str:
+        """One line on the floor and the order stream, for headers and reports.
+
+        >>> Warehouse(order_interval=60.0).summary()
+        'warehouse small-warehouse (12 x 7.5 m), an order every 60 s on average'
+        """
+        floor = floor_of(self)
+        return (
+            f"warehouse {self.map} ({floor.width:g} x {floor.height:g} m), "
+            f"an order every {self.order_interval:g} s on average"
+        )
+
     def order_capacity(self, run_seconds: float) -> int:
         """Carriers a run of ``run_seconds`` pre-allocates: initial orders plus the stream's tail.
 
