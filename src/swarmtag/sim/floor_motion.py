@@ -13,6 +13,8 @@ none and never calls them):
   predock point behind a shelf is not a usable face).
 - ``inside_area``: a carrier lies wholly inside its destination's drop-off
   cells (its four corners are).
+- ``hidden_by_shelves``: shelves hide carriers from the camera (a sight
+  line through a shelf cell is blocked) wherever occlusion is on;
 - ``transport_waypoints``: where a loaded robot drives next: the centre of
   the next cell on a shortest path to its destination area
   (``FloorMap.waypoint``).
@@ -24,11 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.sim.floor_map import FloorMap
-from swarmtag.sim.geometry import Float, contact_xy
+from swarmtag.sim.geometry import Float, contact_xy, segment_crosses_box
 
 __all__ = [
     "DIAGONALS",
     "clear_of_shelves",
+    "hidden_by_shelves",
     "inside_area",
     "keep_off_shelves",
     "start_cells",
@@ -104,6 +107,34 @@ def inside_area(x: Float, y: Float, half: float, area: Int, floor: FloorMap) -> 
             row, col = floor.cell_of(x + sx, y + sy)
             inside &= floor.area[row, col] == area
     return inside
+
+
+def hidden_by_shelves(start: Float, end: Float, floor: FloorMap) -> NDArray[np.bool_]:
+    """(K,): sight lines ``start``-``end`` (K, 2) that pass through a shelf cell.
+
+    The cells tested are those of the segment's bounding box; a line that
+    only grazes a shelf's edge or corner is not blocked (the open square of
+    ``geometry.segment_crosses_box``).
+    """
+    row0, col0 = start_cells(floor, start)
+    row1, col1 = start_cells(floor, end)
+    low_row, high_row = np.minimum(row0, row1), np.maximum(row0, row1)
+    low_col, high_col = np.minimum(col0, col1), np.maximum(col0, col1)
+    if start.shape[0] == 0:
+        return np.zeros(0, dtype=bool)
+    span = int(max((high_row - low_row).max(), (high_col - low_col).max())) + 1
+    steps = np.arange(span)
+    rows = low_row[:, None, None] + steps[None, :, None]  # (K, S, 1)
+    cols = low_col[:, None, None] + steps[None, None, :]  # (K, 1, S)
+    inside = (rows <= high_row[:, None, None]) & (cols <= high_col[:, None, None])
+    blocked = floor.blocked[np.minimum(rows, floor.rows) + 1, np.minimum(cols, floor.cols) + 1]
+    shelf = inside & blocked
+    centre = np.stack(np.broadcast_arrays((cols + 0.5) * floor.cell, (rows + 0.5) * floor.cell), -1)
+    crosses = segment_crosses_box(
+        start[:, None, None, :], end[:, None, None, :], centre, 0.5 * floor.cell
+    )
+    hidden: NDArray[np.bool_] = (crosses & shelf).any(axis=(1, 2))
+    return hidden
 
 
 def transport_waypoints(position: Float, destination: Int, floor: FloorMap) -> Float:

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.sim.broad_phase import build_grid, grid_pays, near_segments
+from swarmtag.sim.floor_motion import hidden_by_shelves
 from swarmtag.sim.geometry import Float, length, segment_crosses_box, segment_near_point
 from swarmtag.sim.params import Params
 from swarmtag.sim.randomness import TickInputs
@@ -115,7 +116,8 @@ def line_of_sight(
     """``visible`` (R, N, C) with the sightings whose line of sight is blocked removed.
 
     Occluders: other carriers in the arena and not carried (their squares),
-    and with ``carriers+robots`` the other robots (their discs). Many
+    a warehouse's shelves, and with ``carriers+robots`` the other robots
+    (their discs). Many
     occluders: only those near each line are tested
     (``swarmtag.sim.broad_phase``; the same result).
     """
@@ -134,6 +136,8 @@ def line_of_sight(
         blocked = (crosses & blocking).any(axis=1)
     else:
         blocked = _hidden_by_carriers(state, obstacle, (runs, carriers, start, end), params)
+    if params.floor is not None:
+        blocked |= hidden_by_shelves(start, end, params.floor)
     if params.occlusion >= 2:
         if not grid_pays("sight", runs.size, state.robot_pos.shape[1]):
             bodies = state.robot_pos[runs]  # (K, N, 2)

@@ -123,3 +123,24 @@ def test_large_scenes_place_every_robot_apart():
     gaps = np.sqrt(((pos[:, None, :] - pos[None, :, :]) ** 2).sum(axis=-1))
     np.fill_diagonal(gaps, np.inf)
     assert gaps.min() >= 0.25
+
+
+def test_machine_code_from_other_sources_is_discarded(tmp_path):
+    from types import SimpleNamespace
+
+    from swarmtag.sim.fast._jit import _STAMP, _sources_digest, discard_stale_machine_code
+
+    entry = SimpleNamespace(_cache=SimpleNamespace(_cache_path=str(tmp_path)))
+    cached = [tmp_path / "_tick.advance-1.py311.nbi", tmp_path / "_tick.advance-1.py311.1.nbc"]
+    keep = tmp_path / "_tick.cpython-311.pyc"
+    for path in (*cached, keep):
+        path.write_bytes(b"x")
+    (tmp_path / _STAMP).write_text("an older digest")
+    discard_stale_machine_code(entry)  # the sources changed: the machine code goes
+    assert not any(path.exists() for path in cached)
+    assert keep.exists()
+    assert (tmp_path / _STAMP).read_text() == _sources_digest()
+    for path in cached:
+        path.write_bytes(b"x")
+    discard_stale_machine_code(entry)  # the same sources: it stays
+    assert all(path.exists() for path in cached)

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import math
 
-from swarmtag.sim.fast._geometry import contact, maximum, minimum
+from swarmtag.sim.fast._geometry import contact, maximum, minimum, segment_crosses_box
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
 
 __all__ = [
     "cell_of",
     "clear_of_shelves",
+    "hidden_by_shelves",
     "in_dropoff",
     "inside_area",
     "keep_off_shelves",
@@ -108,3 +109,19 @@ def waypoint_of(px: float, py: float, destination: int, k: Constants) -> tuple[f
     """``floor_motion.transport_waypoints`` for one robot."""
     row, col = cell_of(px, py, k)
     return k.floor_waypoint[destination, row, col, 0], k.floor_waypoint[destination, row, col, 1]
+
+
+@inlined
+def hidden_by_shelves(sx: float, sy: float, ex: float, ey: float, k: Constants) -> bool:
+    """``floor_motion.hidden_by_shelves`` for one sight line."""
+    row0, col0 = cell_of(sx, sy, k)
+    row1, col1 = cell_of(ex, ey, k)
+    cell = k.floor_cell
+    half = 0.5 * cell
+    for row in range(min(row0, row1), max(row0, row1) + 1):
+        for col in range(min(col0, col1), max(col0, col1) + 1):
+            if k.floor_blocked[row + 1, col + 1] and segment_crosses_box(
+                sx, sy, ex, ey, (col + 0.5) * cell, (row + 0.5) * cell, half
+            ):
+                return True
+    return False

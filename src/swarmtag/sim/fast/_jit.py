@@ -25,12 +25,19 @@ Two measured costs shape the rest:
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import os
 from collections.abc import Callable
-from typing import Any, TypeVar
+from pathlib import Path
+from typing import Any, Final, TypeVar
 
 import numba
 
-__all__ = ["counted", "inlined", "jit"]
+__all__ = ["counted", "discard_stale_machine_code", "inlined", "jit"]
+
+_STAMP: Final = "swarmtag-kernel-sources.sha256"
+"""File beside the cached machine code: the digest of the sources it was compiled from."""
 
 _F = TypeVar("_F", bound=Callable[..., Any])
 
@@ -62,3 +69,42 @@ def counted(function: _F) -> _F:
     """Like ``jit`` with numba's reference counting on (typed lists, array views)."""
     compiled: _F = _njit(**_OPTIONS)(function)
     return compiled
+
+
+def _sources_digest() -> str:
+    """SHA-256 over this package's Python sources (names and bytes, in name order)."""
+    digest = hashlib.sha256()
+    for path in sorted(Path(__file__).parent.glob("*.py")):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def discard_stale_machine_code(entry: object) -> None:
+    """Delete cached machine code compiled from other sources than this package's now.
+
+    numba checks a cached function against its own file only, but the
+    kernel's entry points inline functions from every module of the package:
+    after an edit to ``_sense.py`` alone, ``_tick.advance`` would load machine
+    code built from the old ``_sense.py``. So the cache folder (the one
+    numba chose for ``entry``) carries the digest of all the sources, and
+    when it differs every cached file there goes and is compiled again. A
+    folder that cannot be written is left alone (numba cannot cache there
+    either).
+    """
+    folder = getattr(getattr(entry, "_cache", None), "_cache_path", None)
+    if not isinstance(folder, str) or not Path(folder).is_dir():
+        return
+    stamp = Path(folder) / _STAMP
+    current = _sources_digest()
+    with contextlib.suppress(OSError):
+        if stamp.read_text(encoding="ascii") == current:
+            return
+    try:
+        for cached in Path(folder).iterdir():
+            if cached.suffix in (".nbi", ".nbc"):
+                cached.unlink(missing_ok=True)
+        temporary = stamp.with_suffix(f".{os.getpid()}.tmp")
+        temporary.write_text(current, encoding="ascii")
+        temporary.replace(stamp)
+    except OSError:
+        return

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+from swarmtag.sim.fast._floor import hidden_by_shelves
 from swarmtag.sim.fast._geometry import segment_crosses_box, segment_near_point
 from swarmtag.sim.fast._grid import near
 from swarmtag.sim.fast._jit import inlined
@@ -137,6 +138,10 @@ def _hidden_by_robots(r: int, n: int, c: int, w: World, k: Constants, x: Scratch
 def _line_of_sight(r: int, n: int, c: int, w: World, k: Constants, x: Scratch) -> bool:
     """``sense.line_of_sight`` for one sighting: no other carrier (or robot) in the way."""
     if _hidden_by_carriers(r, n, c, w, k, x):
+        return False
+    sx = w.robot_pos[r, n, 0]
+    sy = w.robot_pos[r, n, 1]
+    if k.has_floor and hidden_by_shelves(sx, sy, w.carrier_pos[r, c, 0], w.carrier_pos[r, c, 1], k):
         return False
     return not (k.occlusion >= 2 and _hidden_by_robots(r, n, c, w, k, x))
 
