@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -85,3 +87,71 @@ def event_rows(result: SimResult, *, candidates: bool = False) -> list[tuple[int
         strict=True,
     )
     return [row for row in rows if candidates or row[1] != "candidates"]
+
+
+# -- warehouses -------------------------------------------------------------------------------
+
+NEVER = 10**9
+"""A due tick no test run reaches: the order is allocated but never placed."""
+
+
+def warehouse_params(
+    map_file: Path,
+    text: str,
+    *,
+    policy: Policy | None = None,
+    warehouse: Mapping[str, object] | None = None,
+    **scenario: object,
+) -> Params:
+    """Kernel parameters for a warehouse on map ``text`` (written to ``map_file``).
+
+    The order stream defaults to no orders beyond ``initial_orders`` (0) in
+    any run a test steps, so the scenario pre-allocates 7 carriers.
+    """
+    map_file.write_text(text, encoding="utf-8")
+    part = {"map": str(map_file), "initial_orders": 0, "order_interval": 1e6}
+    part.update(warehouse or {})
+    return make_params(
+        Scenario.from_mapping({**scenario, "warehouse": part}), policy or Proximity()
+    )
+
+
+def order_scene(
+    params: Params,
+    robots: Sequence[Sequence[float]],
+    *,
+    due: Sequence[int] = (),
+    carriers: Sequence[Sequence[float]] = (),
+    destination: Sequence[int] = (),
+    slot: Sequence[int] = (),
+    slot_pick: Sequence[float] = (),
+    w0: Sequence[float] = (),
+    heading: Sequence[Sequence[float]] | None = None,
+) -> Scene:
+    """A warehouse scene: the first orders as given, the rest never due (shorter lists pad).
+
+    Carriers not given stand on the first pick-up slot (a placeholder until
+    placed); ``w0`` is the growth base as the state holds it (the draw minus
+    the due tick).
+    """
+    assert params.floor is not None
+    c = params.carriers
+
+    def padded(values: Sequence[float], fill: float, dtype: type) -> np.ndarray:
+        out = np.full(c, fill, dtype=dtype)
+        out[: len(values)] = values
+        return out
+
+    positions = np.repeat(params.floor.pickup_slots[:1], c, axis=0)
+    if len(carriers):
+        positions[: len(carriers)] = carriers
+    scene = Scene.build(
+        robots=robots, carriers=positions, w0=padded(w0, 0.0, np.float64), heading=heading
+    )
+    return replace(
+        scene,
+        due=padded(due, NEVER, np.int64),
+        destination=padded(destination, 0, np.int64),
+        slot=padded(slot, -1, np.int64),
+        slot_pick=padded(slot_pick, 0.0, np.float64),
+    )

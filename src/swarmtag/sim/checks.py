@@ -23,7 +23,19 @@ from swarmtag.sim.scenario import Scenario
 
 __all__ = ["check_common_scenes", "check_determinism", "run_csv"]
 
-_SCENE_FIELDS = ("robot_pos", "heading", "speed", "carrier_pos", "urgency0", "order_time", "w0")
+_SCENE_FIELDS = (
+    "robot_pos",
+    "heading",
+    "speed",
+    "carrier_pos",
+    "urgency0",
+    "order_time",
+    "w0",
+    "due",
+    "destination",
+    "slot",
+    "slot_pick",
+)
 
 
 def run_csv(result: SimResult, run: int) -> tuple[bytes, bytes]:

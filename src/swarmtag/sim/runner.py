@@ -21,6 +21,7 @@ from swarmtag._resources import check_memory
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable
 from swarmtag.policy import Policy
+from swarmtag.sim.broad_phase import grid_pays
 from swarmtag.sim.builtin import BUILTIN
 from swarmtag.sim.control import Controller
 from swarmtag.sim.events import EventKind, EventRecorder
@@ -249,16 +250,20 @@ def batch_memory(
     state, the advertisement delay buffer and, when recording, every tick's
     poses. Fast: the state's robot-carrier arrays (42 B per pair) and the
     kernel's (24 B, 48 more with advertisement loss or camera noise), the
-    start state's free-face test (~400 B per carrier pair), per-body state,
+    start state's free-face test (~400 B per carrier pair, or ~1.8 kB per
+    carrier with its grid, measured), per-body state,
     grids and event buffers (docs/performance.md measures it).
     """
     robots, carriers = scenario.robots, scenario.carriers
     if backend == "fast":
         realism = scenario.realism
         pair = 66.0 + (48.0 if realism.advertisement_loss or realism.detection_noise else 0.0)
+        free = (  # the start state's free faces: a grid from a few dozen carriers on
+            2000.0 * carriers if grid_pays("free", 4 * carriers, carriers) else 400.0 * carriers**2
+        )
         per_run = (
             pair * robots * carriers
-            + 400.0 * carriers**2
+            + free
             + 1000.0 * robots
             + 600.0 * carriers
             + 24.0 * (realism.status_delay + 1) * carriers

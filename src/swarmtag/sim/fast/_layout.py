@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag.sim.fast._grid import table_bits
+from swarmtag.sim.floor_map import PICKUP
 from swarmtag.sim.params import Params
 from swarmtag.sim.state import WorldState
 
@@ -167,6 +168,8 @@ class Constants(NamedTuple):
     """(D,) the destination (area) ids."""
     pickup_slots: F8
     """(K, 2) the pick-up slots' centres (one dummy slot in the lab arena)."""
+    slot_at: I8
+    """(rows, cols) the pick-up slot of each cell, -1 none."""
 
 
 class Scratch(NamedTuple):
@@ -256,6 +259,10 @@ class Scratch(NamedTuple):
     """(R, N) robots a query around a point or a line of sight found (any order)."""
     free_slots: I8
     """(R, K) the pick-up slots free for an order, ascending (warehouse)."""
+    slot_taken: B1
+    """(R, K) slots a standing carrier or a robot takes (warehouse)."""
+    order_cursor: I8
+    """(R,) the orders before it are placed (they are placed in order)."""
 
     slot_on: B1
     slot_carrier: I8
@@ -289,6 +296,7 @@ def constants_of(params: Params) -> Constants:
         waypoint = np.zeros((1, 1, 1, 2))
         destinations = np.zeros(1, dtype=np.int64)
         slots = np.zeros((1, 2))
+        slot_at = np.full((1, 1), -1, dtype=np.int64)
         floor_cell, rows, cols = 1.0, 1, 1
     else:
         blocked = np.array(floor.blocked, dtype=bool)
@@ -296,6 +304,8 @@ def constants_of(params: Params) -> Constants:
         waypoint = np.array(floor.waypoint, dtype=np.float64)
         destinations = np.array(floor.destinations, dtype=np.int64)
         slots = np.array(floor.pickup_slots, dtype=np.float64)
+        slot_at = np.full(floor.kind.shape, -1, dtype=np.int64)
+        slot_at[floor.kind == PICKUP] = np.arange(slots.shape[0])  # row by row, as the slots
         floor_cell, rows, cols = floor.cell, floor.rows, floor.cols
     half, radius = params.carrier_half, params.robot_radius
     cell = max(2 * half, half + radius, 2 * radius)
@@ -355,6 +365,7 @@ def constants_of(params: Params) -> Constants:
         floor_waypoint=waypoint,
         floor_destinations=destinations,
         pickup_slots=slots,
+        slot_at=slot_at,
     )
 
 
@@ -446,6 +457,8 @@ def scratch_for(
         near_blockers=np.zeros(c, dtype=np.int64),
         near_robots=np.zeros(n, dtype=np.int64),
         free_slots=np.zeros((runs, slots), dtype=np.int64),
+        slot_taken=np.zeros((runs, slots), dtype=bool),
+        order_cursor=np.zeros(runs, dtype=np.int64),
         slot_on=np.zeros((*n, EVENT_SLOTS), dtype=bool),
         slot_carrier=np.zeros((*n, EVENT_SLOTS), dtype=np.int64),
         slot_value=np.zeros((*n, EVENT_SLOTS)),

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 from swarmtag.sim.fast._docking import free_faces_run
+from swarmtag.sim.fast._floor import cell_of
 from swarmtag.sim.fast._geometry import contact
 from swarmtag.sim.fast._index import index_obstacles
 from swarmtag.sim.fast._jit import inlined
@@ -23,49 +24,63 @@ _ARRIVE = 10
 
 
 @inlined
-def _robot_on(r: int, sx: float, sy: float, w: World, k: Constants) -> bool:
-    """Whether a carrier set down at (sx, sy) would overlap a robot (``orders._robots_on``)."""
+def _mark_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
+    """Mark the slots a carrier set down on would overlap a robot (``orders._robots_on``).
+
+    A body that overlaps a slot's square stands within a carrier's side of
+    the slot, so in the slot's cell or a neighbour: each robot tests the
+    slots of the 3 x 3 cells around its own.
+    """
     for n in range(k.robots):
+        px = w.robot_pos[r, n, 0]
+        py = w.robot_pos[r, n, 1]
         mode = w.mode[r, n]
         loaded = (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and w.target[r, n] >= 0
         extent = k.carrier_half if loaded else 0.0
         radius = 0.0 if loaded else k.robot_radius
-        dx = w.robot_pos[r, n, 0] - sx
-        dy = w.robot_pos[r, n, 1] - sy
-        _, _, depth = contact(dx, dy, extent + k.carrier_half, radius, 1.0)
-        if depth > 0:
-            return True
-    return False
+        row, col = cell_of(px, py, k)
+        for near_row in range(max(row - 1, 0), min(row + 2, k.floor_rows)):
+            for near_col in range(max(col - 1, 0), min(col + 2, k.floor_cols)):
+                s = k.slot_at[near_row, near_col]
+                if s < 0 or x.slot_taken[r, s]:
+                    continue
+                dx = px - k.pickup_slots[s, 0]
+                dy = py - k.pickup_slots[s, 1]
+                _, _, depth = contact(dx, dy, extent + k.carrier_half, radius, 1.0)
+                if depth > 0:
+                    x.slot_taken[r, s] = True
 
 
 @inlined
 def place_orders_run(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
-    """``orders.place_orders`` for run ``r`` at the end of tick ``t``; ARRIVE rows buffered."""
+    """``orders.place_orders`` for run ``r`` at the end of tick ``t``; ARRIVE rows buffered.
+
+    Orders are placed in order number and an order waits for every earlier
+    one, so the placed orders are a prefix: ``x.order_cursor`` is its end.
+    """
     if not k.has_floor or w.ended_at[r] >= 0:
         return
-    waiting = False
-    for c in range(k.carriers):
-        if w.arrival_time[r, c] < 0 and w.due[r, c] <= t:
-            waiting = True
-            break
-    if not waiting:
+    cursor = x.order_cursor[r]
+    while cursor < k.carriers and w.arrival_time[r, cursor] >= 0:
+        cursor += 1
+    x.order_cursor[r] = cursor
+    if cursor == k.carriers or w.due[r, cursor] > t:
         return
     slots = k.pickup_slots.shape[0]
+    for s in range(slots):
+        x.slot_taken[r, s] = False
+    for c in range(cursor):
+        if w.present[r, c] and w.carried_by[r, c] < 0 and w.slot[r, c] >= 0:
+            x.slot_taken[r, w.slot[r, c]] = True
+    _mark_robots(r, w, k, x)
     free = 0
     for s in range(slots):
-        taken = False
-        for c in range(k.carriers):
-            if w.present[r, c] and w.carried_by[r, c] < 0 and w.slot[r, c] == s:
-                taken = True
-                break
-        if not taken and not _robot_on(r, k.pickup_slots[s, 0], k.pickup_slots[s, 1], w, k):
+        if not x.slot_taken[r, s]:
             x.free_slots[r, free] = s
             free += 1
     placed = False
-    for c in range(k.carriers):
-        if not (w.arrival_time[r, c] < 0 and w.due[r, c] <= t):
-            continue
-        if free == 0:
+    for c in range(cursor, k.carriers):
+        if w.due[r, c] > t or free == 0:
             break
         pick = int(w.slot_pick[r, c] * free)
         s = x.free_slots[r, pick]
