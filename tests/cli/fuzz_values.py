@@ -250,7 +250,7 @@ def study_with(n: int, key: str, value: str) -> Made:
 
 SHIPPED_STUDIES = (
     "preliminary-sweep", "candidate-alphas", "controller-selection", "physical-style",
-    "scalability",
+    "scalability", "warehouse",
 )  # fmt: skip
 """Shipped study names: real work, so an invocation naming one runs guarded."""
 STUDY_SOURCE = Values(

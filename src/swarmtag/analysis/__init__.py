@@ -14,7 +14,9 @@ shows; the pieces are public for studies and reports:
   (undelivered carriers right-censored at run end) and its Kaplan-Meier P95;
 - ``condition_statistics`` adds bootstrap intervals and the PA and latency
   curves with bands; ``compare`` / ``compare_all`` give differences with a
-  bootstrap CI, the bootstrap p-value and Mann-Whitney U.
+  bootstrap CI, the bootstrap p-value and Mann-Whitney U;
+- ``trim_warmup`` keeps the orders placed after a warm-up: the KPIs of
+  continuous (warehouse) operation are those of the trimmed log.
 """
 
 from __future__ import annotations
@@ -68,6 +70,7 @@ from swarmtag.analysis.latency import UrgencyLatency, latency_by_urgency
 from swarmtag.analysis.resampling import condition_seed_sequence
 from swarmtag.analysis.runs import ConditionRuns, split_conditions
 from swarmtag.analysis.summary import DEFAULT_BASELINE, MetricsReport, choose_baseline, summarize
+from swarmtag.analysis.window import trim_warmup
 
 __all__ = [
     "CENSORED_METRICS",
@@ -112,5 +115,6 @@ __all__ = [
     "run_values",
     "split_conditions",
     "summarize",
+    "trim_warmup",
     "undelivered_differs",
 ]

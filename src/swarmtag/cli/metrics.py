@@ -16,7 +16,7 @@ from rich.table import Table
 
 from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
-from swarmtag._checks import MAX_SEED
+from swarmtag._checks import MAX_SEED, check_number
 from swarmtag._outputs import OutputPlan, Stage
 from swarmtag.analysis import (
     CENSORED_METRICS,
@@ -24,6 +24,7 @@ from swarmtag.analysis import (
     OPTIONAL_METRICS,
     MetricsReport,
     summarize,
+    trim_warmup,
 )
 from swarmtag.analysis.choice_tables import (
     choice_notes,
@@ -48,8 +49,10 @@ from swarmtag.analysis.tables import (
     metric_label,
     unit_word,
 )
+from swarmtag.analysis.window import window_note
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
+from swarmtag.errors import StatisticsError
 from swarmtag.io import CarrierLog, EventTable, read_event_log, read_event_table
 
 __all__ = ["metrics", "render_choices", "render_report", "summarize_with_choices"]
@@ -189,6 +192,8 @@ def _write_html(
     report: MetricsReport,
     log: CarrierLog,
     choices: Sequence[ConditionChoices] | None,
+    *,
+    warmup: float,
 ) -> None:
     """One-section HTML report of an event log: tables and embedded figures."""
     from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
@@ -202,7 +207,8 @@ def _write_html(
                 "baseline": report.baseline,
                 "time unit": unit_word(report.time_unit),
                 "bootstrap": f"{report.n_resamples} resamples over runs, seed {report.seed}",
-            },
+            }
+            | ({"KPI window": window_note(warmup, unit_word(report.time_unit))} if warmup else {}),
             tables_html=[html_tables(report)] + ([choices_html(choices)] if choices else []),
             figures=write_figures(report, log, folder),
         )
@@ -225,6 +231,7 @@ def _write_outputs(
     latex: Path | None,
     html_out: Path | None,
     figures: Path | None,
+    warmup: float,
 ) -> list[str]:
     """Write the planned outputs into ``stage``; what was written, for the closing lines."""
     written = []
@@ -242,7 +249,7 @@ def _write_outputs(
         drawn = write_figures(report, log, stage.path(figures))
         written += [f"figure: {figures / path.name}" for path in drawn]
     if html_out is not None:
-        _write_html(stage.path(html_out), events, report, log, choices)
+        _write_html(stage.path(html_out), events, report, log, choices, warmup=warmup)
         written.append(f"HTML report: {html_out}")
     return written
 
@@ -258,6 +265,15 @@ def _write_outputs(
     show_default=True,
     metavar="S",
     help="Master seed of the bootstrap (each condition's stream is keyed by its name).",
+)
+@click.option(
+    "--warmup",
+    type=float,
+    default=0.0,
+    show_default=True,
+    metavar="T",
+    help="Leave out the orders placed before T (the log's time unit): the KPIs of continuous "
+    "operation, e.g. a warehouse run, over the orders placed after its warm-up.",
 )
 @click.option(
     "--json", "as_json", is_flag=True, help="Print one JSON object (SPEC §8.2) instead of tables."
@@ -292,6 +308,7 @@ def metrics(
     baseline: str | None,
     resamples: int,
     seed: int,
+    warmup: float,
     as_json: bool,
     event_table: Path | None,
     markdown: Path | None,
@@ -306,8 +323,10 @@ def metrics(
     deliveries and undelivered carriers, and the censoring-aware latencies
     (undelivered carriers counted at run end - order time: lower bounds; the
     Kaplan-Meier P95). Each other condition is compared with the baseline:
-    difference with CI, bootstrap p-value and Mann-Whitney U.
+    difference with CI, bootstrap p-value and Mann-Whitney U. With --warmup T
+    every figure covers the orders placed at or after T, followed to the run's end.
     """
+    start = check_number("--warmup", warmup, low=0.0, error=StatisticsError)  # nan, inf pass click
     plan = OutputPlan()
     plan.input("EVENTS", events)
     if event_table is not None:
@@ -321,7 +340,7 @@ def metrics(
             plan.file(option, path, suffixes=suffixes)
     if figures is not None:
         plan.folder("--figures", figures)
-    log = read_event_log(events)
+    log = trim_warmup(read_event_log(events), start)
     table = read_event_table(event_table) if event_table is not None else None
     check_bootstrap_memory(resamples, len(log), len(log.conditions))
     status = Console(stderr=True).status(
@@ -341,6 +360,7 @@ def metrics(
             latex=latex,
             html_out=html_out,
             figures=figures,
+            warmup=start,
         )
     if as_json:
         document = report.to_json()
@@ -352,6 +372,8 @@ def metrics(
         return
     console = make_console()
     render_report(report, console)
+    if start:
+        console.print(window_note(start, unit_word(report.time_unit)), highlight=False)
     if choices is not None:
         render_choices(choices, console)
     for line in written:

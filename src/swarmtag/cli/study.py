@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -75,7 +75,7 @@ def run_cmd(
 
     spec = load_study(source)
     show = sys.stderr.isatty() if progress is None else progress
-    _note(backend if backend is not None else spec.backend, scheduler)
+    _note([backend if backend is not None else spec.backend], scheduler)
     result = run_study(
         spec,
         out_dir=out_dir,
@@ -94,25 +94,33 @@ def run_cmd(
         click.echo(f"metrics ({scale}): {path}")
 
 
-def _note(backend: str | None, scheduler: str | None) -> None:
-    """Say so before the fast kernel is compiled in this process (not on a cluster)."""
+def _note(backends: Iterable[str | None], scheduler: str | None) -> None:
+    """Say so before the fast kernel is compiled in this process (not on a cluster).
+
+    ``backends``: those the studies will run on (the option's, else each study's).
+    """
     if scheduler is None:
         try:
-            resolved = resolve_backend(backend)
+            resolved = {resolve_backend(backend) for backend in backends}
         except ConfigError as error:
             raise StudyError(str(error)) from None
-        note_compilation(resolved)
+        for name in sorted(resolved):
+            note_compilation(name)
 
 
 def _studies(sources: Sequence[str], out_dir: Path | None) -> list[Any]:
-    """The studies named (shipped names or files); by default every shipped one (with results)."""
-    from swarmtag.experiments import STUDIES, load_study  # noqa: PLC0415 - DuckDB is an extra
+    """The studies named (shipped names or files); by default those of SPEC §6 (``REPRODUCED``).
+
+    With ``out_dir`` (``study report``) the default is every shipped study with results there.
+    """
+    from swarmtag.experiments import REPRODUCED, STUDIES, load_study  # noqa: PLC0415 - DuckDB
 
     if sources:
         return [load_study(source) for source in sources]
     if out_dir is not None:
         check_path(out_dir, what="DIR", error=StudyError)
-    names = [name for name in STUDIES if out_dir is None or (out_dir / name).is_dir()]
+    shipped = REPRODUCED if out_dir is None else tuple(STUDIES)
+    names = [name for name in shipped if out_dir is None or (out_dir / name).is_dir()]
     if not names:
         msg = f"{out_dir}: no results of a shipped study here; name the study with --study"
         raise StudyError(msg)
@@ -196,7 +204,7 @@ def reproduce(
 
     studies = _studies(sources, None)
     show = sys.stderr.isatty() if progress is None else progress
-    _note(backend, scheduler)
+    _note([backend if backend is not None else spec.backend for spec in studies], scheduler)
     started = time.perf_counter()
     results = []
     for spec in studies:

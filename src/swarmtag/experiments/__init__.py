@@ -9,13 +9,15 @@
     result.metrics_paths    # {"default": Path("out/controller-selection/default/metrics.json")}
 
 - ``Study`` / ``Scale``: a validated study file (``spec.py``); ``STUDIES``
-  and ``load_study``: the shipped studies (``registry.py``);
+  and ``load_study``: the shipped studies, ``REPRODUCED`` those of SPEC §6
+  (``registry.py``);
 - ``ResultsStore`` / ``RunKey``: every run's rows in one DuckDB file, one
   transaction per chunk (``store.py``; the ``experiments`` extra);
 - ``ChunkJob`` / ``simulate_chunk``: the unit of work (``chunks.py``);
   local process pool or Dask cluster (``execute.py``);
 - ``run_study``: chunks of missing runs in parallel, stored as they finish,
-  metrics per scale (``runner.py``).
+  metrics per scale (``runner.py``; a warehouse scale's over the orders
+  placed after its warm-up, ``kpi_log``).
 
 See docs/experiments.md for the study file format, the store's schema and how resume works.
 """
@@ -23,11 +25,12 @@ See docs/experiments.md for the study file format, the store's schema and how re
 from __future__ import annotations
 
 from swarmtag.experiments.chunks import ChunkJob, simulate_chunk, split_runs
-from swarmtag.experiments.registry import STUDIES, load_study, study_path
+from swarmtag.experiments.registry import REPRODUCED, STUDIES, load_study, study_path
 from swarmtag.experiments.runner import (
     QUICK_RESAMPLES,
     STORE_NAME,
     StudyResult,
+    kpi_log,
     plan_chunks,
     run_study,
     study_key,
@@ -39,6 +42,7 @@ __all__ = [
     "DEFAULT_SCALE",
     "KEY_COLUMNS",
     "QUICK_RESAMPLES",
+    "REPRODUCED",
     "SCHEMA_SQL",
     "STORE_NAME",
     "STUDIES",
@@ -49,6 +53,7 @@ __all__ = [
     "Scale",
     "Study",
     "StudyResult",
+    "kpi_log",
     "load_study",
     "plan_chunks",
     "read_study_file",

@@ -2,6 +2,8 @@
 
 ``STUDIES`` maps each shipped study's name to its file name; a test checks
 that it and the folder agree, so a new study file is registered on purpose.
+``REPRODUCED`` names those ``swarmtag reproduce`` runs by default (SPEC §6);
+the others run by name (``swarmtag study run warehouse``).
 ``load_study`` takes a shipped study's name or the path of a user's file.
 """
 
@@ -17,7 +19,7 @@ from swarmtag._inputs import is_regular_file
 from swarmtag.errors import StudyError
 from swarmtag.experiments.spec import Study, read_study_file
 
-__all__ = ["STUDIES", "load_study", "study_path"]
+__all__ = ["REPRODUCED", "STUDIES", "load_study", "study_path"]
 
 STUDIES: Final = MappingProxyType(
     {
@@ -26,9 +28,22 @@ STUDIES: Final = MappingProxyType(
         "controller-selection": "controller-selection.toml",
         "physical-style": "physical-style.toml",
         "scalability": "scalability.toml",
+        "warehouse": "warehouse.toml",
     }
 )
-"""Shipped studies of SPEC §6, in the order of its table: name -> file in ``studies/``."""
+"""Shipped studies: SPEC §6's in the order of its table, then the others; name -> file."""
+REPRODUCED: Final = (
+    "preliminary-sweep",
+    "candidate-alphas",
+    "controller-selection",
+    "physical-style",
+    "scalability",
+)
+"""The studies of SPEC §6, which ``swarmtag reproduce`` runs by default.
+
+The warehouse study is left out: its hall runs dozens of robots for minutes
+of robot time, which would multiply the time of a quick reproduction.
+"""
 
 
 def study_path(name: str) -> Path:

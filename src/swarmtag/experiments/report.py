@@ -11,6 +11,8 @@ where a study sweeps one policy). Studies with several swarm sizes also get
 the scalability table (relative changes signed so that positive is better)
 and one panel set per size. ``DIR/report.html`` collects everything with the
 study parameters, the code version and the wall time of the last run.
+A warehouse scale's KPIs (tables, figures) cover the orders placed after its
+warm-up (``runner.kpi_log``); its exported logs keep every order.
 """
 
 from __future__ import annotations
@@ -36,9 +38,16 @@ from swarmtag.analysis.tables import (
     scalability_html,
     scalability_table,
 )
+from swarmtag.analysis.window import window_note
 from swarmtag.errors import StudyError
-from swarmtag.experiments.runner import QUICK_RESAMPLES, STORE_NAME, StudyResult, study_key
-from swarmtag.experiments.spec import Study
+from swarmtag.experiments.runner import (
+    QUICK_RESAMPLES,
+    STORE_NAME,
+    StudyResult,
+    kpi_log,
+    study_key,
+)
+from swarmtag.experiments.spec import Scale, Study
 from swarmtag.experiments.store import ResultsStore
 from swarmtag.io import CarrierLog
 
@@ -132,7 +141,7 @@ def _scale_reports(
     reports = {}
     for scale in study.scales:
         key = study_key(study, scale.key)
-        log = store.load_log(key, study.conditions, runs)
+        log = kpi_log(store.load_log(key, study.conditions, runs), scale)
         report = known.get(scale.key) or summarize(
             log, baseline=study.baseline, n_resamples=resamples, seed=study.seed
         )
@@ -147,6 +156,25 @@ def _scale_reports(
     return reports
 
 
+def _scale_fact(scale: Scale) -> str:
+    """One scale in the facts: bodies, run length, floor (arena or warehouse), perception."""
+    scenario = scale.scenario
+    warehouse = scenario.warehouse
+    if warehouse is None:
+        bodies = f"{scenario.robots} robots / {scenario.carriers} carriers"
+        floor = f"arena {scenario.area.size:g} m"
+    else:
+        bodies = f"{scenario.robots} robots"
+        floor = (
+            f"warehouse {warehouse.map} (an order every {warehouse.order_interval:g} s on "
+            f"average, {warehouse.initial_orders} waiting at the start)"
+        )
+    return (
+        f"{scale.key}: {bodies}, {scenario.run_ticks} ticks of {scenario.tick:g} s, "
+        f"{floor}, {scenario.perception_summary()}"
+    )
+
+
 def _facts(study: Study, runs: int, resamples: int, record: StudyRecord | None) -> dict[str, str]:
     facts = {
         "description": study.description or "-",
@@ -154,16 +182,18 @@ def _facts(study: Study, runs: int, resamples: int, record: StudyRecord | None) 
         "baseline": study.baseline,
         "runs per condition": str(runs),
         "urgency model": study.urgency,
-        "swarm sizes": ", ".join(
-            f"{s.key}: {s.scenario.robots} robots / {s.scenario.carriers} carriers, "
-            f"{s.scenario.run_ticks} ticks of {s.scenario.tick:g} s, "
-            f"arena {s.scenario.area.size:g} m, {s.scenario.perception_summary()}"
-            for s in study.scales
-        ),
+        "swarm sizes": ", ".join(_scale_fact(s) for s in study.scales),
         "master seed": str(study.seed),
         "bootstrap": f"{resamples} resamples over runs",
         "code version": ", ".join(sorted({s.code_version for s in study.scales})),
     }
+    windows = [
+        f"{s.key}: {window_note(s.scenario.warehouse.warmup, 's')}"
+        for s in study.scales
+        if s.scenario.warehouse is not None
+    ]
+    if windows:
+        facts["KPI window"] = "; ".join(windows) + " Choice statistics count whole runs."
     if record is not None:
         facts["wall time of the last run"] = (
             f"{record.wall_time_s:.1f} s ({'quick' if record.quick else 'full'}; "

@@ -15,6 +15,9 @@ Output folder layout::
     DIR/results.duckdb                    the results store (every study, every run)
     DIR/<study>/progress.json             runs stored / total, rewritten after each chunk
     DIR/<study>/<scale>/metrics.json      summarize(...).to_json() of the scale
+
+A warehouse scale's summaries cover the orders placed after its warm-up
+(``kpi_log``); the stored runs keep every order.
 """
 
 from __future__ import annotations
@@ -32,13 +35,14 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from swarmtag._atomic import atomic_write_bytes
 from swarmtag._inputs import check_path
 from swarmtag._resources import check_memory
-from swarmtag.analysis import MetricsReport, summarize
+from swarmtag.analysis import MetricsReport, summarize, trim_warmup
 from swarmtag.analysis.resampling import bootstrap_memory
-from swarmtag.errors import ConfigError, StudyError
+from swarmtag.errors import ConfigError, StatisticsError, StudyError
 from swarmtag.experiments.chunks import ChunkJob, ChunkResult, split_runs
 from swarmtag.experiments.execute import run_dask, run_local
-from swarmtag.experiments.spec import Study
+from swarmtag.experiments.spec import Scale, Study
 from swarmtag.experiments.store import ResultsStore, RunKey
+from swarmtag.io import CarrierLog
 from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER, resolve_backend
 
 __all__ = [
@@ -46,6 +50,7 @@ __all__ = [
     "STORE_NAME",
     "StudyResult",
     "check_study_memory",
+    "kpi_log",
     "plan_chunks",
     "run_study",
     "study_key",
@@ -57,6 +62,20 @@ QUICK_RESAMPLES: Final = 1000
 """Bootstrap resamples under ``quick`` (at most; a study asking fewer keeps its own)."""
 JOB_BYTES: Final = 600
 """Memory of one planned chunk job (its key and run range) until it is done."""
+
+
+def kpi_log(log: CarrierLog, scale: Scale) -> CarrierLog:
+    """The rows a scale's KPIs cover: for a warehouse, the orders placed after its warm-up.
+
+    Continuous operation is measured past its start-up transient
+    (``swarmtag.analysis.window``); other scales keep every row. A warm-up
+    that leaves a run without orders is a ``StudyError`` naming the scale.
+    """
+    try:
+        return trim_warmup(log, scale.kpi_warmup(log.time_unit))
+    except StatisticsError as error:
+        msg = f"scales.{scale.key}: warehouse.warmup: {error}"
+        raise StudyError(msg) from None
 
 
 def study_key(study: Study, scale: str) -> RunKey:
@@ -234,7 +253,7 @@ def _summaries(
     metrics: dict[str, dict[str, Any]] = {}
     paths: dict[str, Path] = {}
     for scale in study.scales:
-        log = store.load_log(study_key(study, scale.key), study.conditions, runs)
+        log = kpi_log(store.load_log(study_key(study, scale.key), study.conditions, runs), scale)
         report = summarize(log, baseline=study.baseline, n_resamples=resamples, seed=study.seed)
         reports[scale.key] = report
         metrics[scale.key] = report.to_json()

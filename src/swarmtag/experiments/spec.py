@@ -39,6 +39,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import math
 import os
 import re
 from collections.abc import Mapping
@@ -157,6 +158,25 @@ class Scale:
         rows, so a changed kernel never reuses runs stored by the old one.
         """
         return f"{__version__}+{_scenario_hash(self.scenario.to_mapping())}.{model_digest()}"
+
+    def kpi_warmup(self, time_unit: str | None) -> float:
+        """Where this scale's KPI window starts, in a log's ``time_unit``: 0 but for a warehouse.
+
+        A warehouse's ``warmup`` seconds, as the first tick at or after them
+        (in ticks, or that tick in seconds), so that float rounding of
+        ``warmup / tick`` never moves an order across the window's edge.
+        """
+        warehouse = self.scenario.warehouse
+        if warehouse is None:
+            return 0.0
+        ticks = warehouse.warmup / self.scenario.tick
+        nearest = round(ticks)
+        first = (
+            nearest
+            if math.isclose(ticks, nearest, rel_tol=1e-9, abs_tol=1e-9)
+            else math.ceil(ticks)
+        )
+        return float(first) if time_unit == "tick" else first * self.scenario.tick
 
 
 @dataclass(frozen=True)
