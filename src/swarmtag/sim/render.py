@@ -40,6 +40,8 @@ _LOADED: Final = (Mode.LIFT, Mode.TRANSPORT, Mode.RELEASE)
 _PICKUP_COLOUR: Final = "#dbe9f6"
 _DROPOFF_COLOUR: Final = "#dff0d8"
 _SHELF_COLOUR: Final = "0.55"
+_RANGES_UP_TO: Final = 12
+"""Most robots (or carriers, disc perception) whose perception ranges a picture draws."""
 _ROBOT_COLOUR: Final = "tab:blue"
 _BROKEN_COLOUR: Final = "0.35"
 
@@ -122,7 +124,7 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
         x, y = carrier_pos[c]
         u = int(urgency[c])
         awaiting = status[c] == TagStatus.AWAITING_PICKUP
-        if awaiting and geo.radio_range == 0.0:
+        if awaiting and geo.radio_range == 0.0 and _draws_ranges(traj):
             ax.add_patch(
                 Circle((x, y), geo.detection_radius, fill=False, linestyle=":", linewidth=0.8,
                        edgecolor="0.45", zorder=1)
@@ -142,7 +144,7 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
             tx, ty = carrier_pos[target]
             ax.plot([x, tx], [y, ty], color=_ROBOT_COLOUR, linewidth=1.0, linestyle="--", zorder=2)
         colour = _BROKEN_COLOUR if mode == Mode.BROKEN else _ROBOT_COLOUR
-        if geo.radio_range > 0.0:
+        if geo.radio_range > 0.0 and _draws_ranges(traj):
             for radius, style in ((geo.detection_radius, ":"), (geo.radio_range, "-.")):
                 ax.add_patch(
                     Circle((x, y), radius, fill=False, linestyle=style, linewidth=0.8,
@@ -161,6 +163,14 @@ def _draw(ax: Axes, traj: Trajectories, row: int, index: int) -> None:
     )
 
 
+def _draws_ranges(traj: Trajectories) -> bool:
+    """Whether the perception ranges are drawn: not around more than ``_RANGES_UP_TO`` bodies."""
+    bodies = (
+        traj.robot_pos.shape[2] if traj.geometry.radio_range > 0.0 else traj.carrier_pos.shape[2]
+    )
+    return bool(bodies <= _RANGES_UP_TO)
+
+
 def _figure(traj: Trajectories) -> tuple[Any, Figure, Axes]:
     plt = pyplot()
     geo = traj.geometry
@@ -172,6 +182,8 @@ def _figure(traj: Trajectories) -> tuple[Any, Figure, Axes]:
         if geo.radio_range > 0.0
         else f"dotted: detection range R = {geo.detection_radius:g} m"
     )
+    if not _draws_ranges(traj):
+        ranges = f"perception ranges not drawn for more than {_RANGES_UP_TO} bodies"
     fig.text(
         0.5, 0.01,
         f"robots: circles (dashed: chosen carrier)   carriers: squares with urgency\n{ranges}",
