@@ -59,3 +59,16 @@ def test_animation_format_checked_first(traj, tmp_path):
     with pytest.raises(ConfigError, match=r"\.gif or \.mp4"):
         animate(traj, tmp_path / "a.avi", run=5)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("robots", "drawn"), [(12, True), (13, False)])
+def test_perception_ranges_are_drawn_around_a_dozen_robots_at_most(robots, drawn, tmp_path):
+    from swarmtag.sim.profiles import load_profile  # split perception: one range pair per robot
+    from swarmtag.sim.render import _draws_ranges
+
+    scenario = load_profile("paper-sim").scenario({"robots": robots, "carriers": 7, "ticks": 5})
+    recorded = simulate(scenario, Urgency(alpha=0.7), seed=0, runs=1, record=True).trajectories
+    assert recorded is not None
+    assert _draws_ranges(recorded) is drawn
+    snapshot(recorded, tmp_path / "crowd.png", tick=1)
+    assert (tmp_path / "crowd.png").stat().st_size > 0
