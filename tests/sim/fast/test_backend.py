@@ -11,7 +11,7 @@ import swarmtag.sim.fast._runner as fast_runner
 import swarmtag.sim.runner as sim_runner
 from swarmtag.errors import ConfigError
 from swarmtag.policy import Proximity, Urgency
-from swarmtag.sim import Realism, Scenario, WorldState, make_params, run_csv, simulate
+from swarmtag.sim import Realism, Scenario, WorldState, load_profile, make_params, run_csv, simulate
 from swarmtag.sim.docking import STUCK_PROGRESS
 from swarmtag.sim.fast import _docking, _scene
 from swarmtag.sim.fast._layout import EVENT_SLOTS, World, constants_of
@@ -144,3 +144,55 @@ def test_machine_code_from_other_sources_is_discarded(tmp_path):
         path.write_bytes(b"x")
     discard_stale_machine_code(entry)  # the same sources: it stays
     assert all(path.exists() for path in cached)
+
+
+def _count_splits(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """Make every batch of one run split its robots; the runs that did, as they step."""
+    monkeypatch.setattr(fast_runner, "SPLIT_FROM", 1)
+    stepped: list[int] = []
+    original = fast_runner._Batch._split_run
+
+    def counted(self: object, r: int, *rest: object) -> None:
+        stepped.append(r)
+        original(self, r, *rest)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(fast_runner._Batch, "_split_run", counted)
+    return stepped
+
+
+def _wide(robots: int, carriers: int, ticks: int, **extra: object) -> Scenario:
+    """A paper-sim run of many robots in an arena wide enough to place them."""
+    arena = {"size": 14.0, "pickup_width": 5.0, "dropoff_width": 5.0}
+    base = {"robots": robots, "carriers": carriers, "ticks": ticks, "arena": arena}
+    return load_profile("paper-sim").scenario({**base, **extra})
+
+
+@pytest.mark.parametrize(
+    ("scenario", "runs"),
+    [
+        (_wide(150, 40, 600), 1),  # the robots' grid and the active collision passes
+        (_wide(60, 100, 1500, **{"camera.occlusion": "carriers+robots", "walk.turn_interval": 0.4,
+                                 "realism.breakdown": 0.0002, "realism.detection_noise": 0.02}), 1),
+        (replace(Scenario.default(5, 10), ticks=400), 1),
+    ],
+    ids=["grids", "realism", "small"],
+)  # fmt: skip
+def test_one_run_split_over_threads_gives_the_same_bytes(scenario, runs, monkeypatch):
+    whole = simulate(scenario, Urgency(alpha=0.7), seed=4, runs=runs, backend="fast", threads=1)
+    splits = _count_splits(monkeypatch)
+    split = simulate(scenario, Urgency(alpha=0.7), seed=4, runs=runs, backend="fast", threads=2)
+    assert_same(whole, split)
+    assert splits, "the run did not take the split path"
+    assert whole.delivered.sum() + (whole.events.kind == "select").sum() > 0
+
+
+def test_a_warehouse_run_split_over_threads_gives_the_same_bytes(monkeypatch):
+    part = {"map": "small-warehouse", "order_interval": 5.0, "initial_orders": 8}
+    scenario = load_profile("lab").scenario({"robots": 30, "ticks": 3000, "warehouse": part})
+    whole = simulate(scenario, Urgency(alpha=3.0), seed=2, runs=1, backend="fast", threads=1)
+    splits = _count_splits(monkeypatch)
+    split = simulate(scenario, Urgency(alpha=3.0), seed=2, runs=1, backend="fast", threads=2)
+    assert_same(whole, split)
+    assert splits
+    assert (split.events.kind == "arrive").sum() > 0
+    assert split.delivered.sum() > 0

@@ -190,17 +190,16 @@ def _obstacle_sums(
 
 
 @inlined
-def _collision_pass(r: int, count: int, w: World, k: Constants, x: Scratch) -> int:
-    """One Jacobi pass for the robots ``x.active[r, :count]`` (all of them without a grid).
+def collide_range(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+    """A Jacobi pass's new positions (``x.new_x``, ``x.new_y``) of ``x.active[r, lo:hi]``.
 
-    Reads the positions at the pass's start (``x.x``, ``x.y``), writes the
-    robots' new ones there afterwards, and lists those that moved (and where
-    they stood) in ``x.movers``; returns how many did.
+    Reads the positions at the pass's start (``x.x``, ``x.y``) only, so
+    ranges of robots may be computed at once on several threads (each with
+    its own ``x.gathered``).
     """
     half = k.carrier_half
     cell = k.grid_cell
-    movers = 0
-    for j in range(count):
+    for j in range(lo, hi):
         n = x.active[r, j] if k.robot_grid else j
         xn = x.x[r, n]
         yn = x.y[r, n]
@@ -258,6 +257,15 @@ def _collision_pass(r: int, count: int, w: World, k: Constants, x: Scratch) -> i
             new_x, new_y = keep_off_shelves(new_x, new_y, extent, radius, row, col, k)
         x.new_x[r, n] = new_x
         x.new_y[r, n] = new_y
+
+
+@inlined
+def _pass_update(r: int, count: int, k: Constants, x: Scratch) -> int:
+    """Move the robots ``x.active[r, :count]`` to their new positions; list the movers.
+
+    Lists those that moved (and where they stood) in ``x.movers``; returns how many did.
+    """
+    movers = 0
     for j in range(count):  # Jacobi: every new position from the pass's start
         n = x.active[r, j] if k.robot_grid else j
         if x.new_x[r, n] != x.x[r, n] or x.new_y[r, n] != x.y[r, n]:
@@ -309,6 +317,13 @@ def _next_active(r: int, movers: int, k: Constants, x: Scratch) -> int:
 
 
 @inlined
+def _collision_pass(r: int, count: int, w: World, k: Constants, x: Scratch) -> int:
+    """One Jacobi pass for the robots ``x.active[r, :count]``; returns how many moved."""
+    collide_range(r, 0, count, w, k, x)
+    return _pass_update(r, count, k, x)
+
+
+@inlined
 def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
     """Resolve collisions of the proposed positions of run ``r`` (``motion.resolve``).
 
@@ -316,6 +331,14 @@ def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
     would change nothing. With a grid (large swarms) a pass after the first
     computes only the robots near a robot the pass before moved.
     """
+    count = resolve_begin(r, w, k, x)
+    collide_range(r, 0, count, w, k, x)
+    resolve_finish(r, count, w, k, x)
+
+
+@inlined
+def resolve_begin(r: int, w: World, k: Constants, x: Scratch) -> int:
+    """Bodies, the proposed positions as the first pass's start, its robots (all of them)."""
     _bodies(r, w, k, x)
     for n in range(k.robots):
         x.x[r, n] = x.proposed[r, n, 0]
@@ -326,12 +349,19 @@ def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
         grid_robots(r, k, x)
         for j in range(k.robots):  # bucket by bucket: neighbours' buckets stay in cache
             x.active[r, j] = x.robot_items[r, j]
-    for it in range(k.collision_iterations):
-        movers = _collision_pass(r, count, w, k, x)
+    return count
+
+
+@inlined
+def resolve_finish(r: int, count: int, w: World, k: Constants, x: Scratch) -> None:
+    """After the first pass's ``collide_range``: its update, the other passes, the outcome."""
+    movers = _pass_update(r, count, k, x)
+    for _ in range(1, k.collision_iterations):
         if movers == 0:
             break
-        if k.robot_grid and it + 1 < k.collision_iterations:
+        if k.robot_grid:
             count = _next_active(r, movers, k, x)
+        movers = _collision_pass(r, count, w, k, x)
     for n in range(k.robots):
         w.contact[r, n, 0] = x.x[r, n] - x.proposed[r, n, 0]
         w.contact[r, n, 1] = x.y[r, n] - x.proposed[r, n, 1]

@@ -14,8 +14,9 @@ each tick can be looked at.
 
 from __future__ import annotations
 
+import itertools
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Final
 
@@ -36,6 +37,14 @@ from swarmtag.sim.fast._layout import (
     state_of,
     world_of,
 )
+from swarmtag.sim.fast._split import (
+    split_begin,
+    split_collide,
+    split_collide_begin,
+    split_finish,
+    split_robots,
+    thread_scratch,
+)
 from swarmtag.sim.fast._tick import advance
 from swarmtag.sim.invariants import check_tick
 from swarmtag.sim.params import Params
@@ -50,6 +59,8 @@ _WORK_PER_CALL: Final = 1_000_000
 """Robot-ticks per kernel call at most (0.1-0.25 s; at least a tick): bounds Ctrl-C latency."""
 _MAX_TICKS_PER_CALL: Final = 4096
 _GROUPS_PER_THREAD: Final = 4
+SPLIT_FROM: Final = 10_000
+"""Robots of a run from which a batch of fewer runs than threads splits each tick's robots."""
 """Runs go to the threads in this many groups per thread (runs end at different ticks)."""
 
 
@@ -72,6 +83,12 @@ def _capacity(robots: int, slots: int) -> int:
     A tick makes at most ``EVENT_SLOTS`` rows per robot and one arrival per pick-up slot.
     """
     return max(256, 4 * EVENT_SLOTS * (robots + slots))
+
+
+def _ranges(count: int, parts: int) -> list[tuple[int, int]]:
+    """``0 .. count`` cut into ``parts`` contiguous ranges of nearly equal length."""
+    edges = [count * i // parts for i in range(parts + 1)]
+    return list(itertools.pairwise(edges))
 
 
 def default_threads() -> int:
@@ -197,7 +214,13 @@ class _Batch:
         self.streams = _Streams(params, seed, [int(run) for run in state.run_ids])
         self.events = EventRecorder()
         self.breakdowns = np.zeros(runs, dtype=np.int64)
-        threads = max(1, min(threads, runs))
+        # fewer runs than threads, many robots: each tick's robots are split over the threads
+        self.split = threads > runs and robots >= SPLIT_FROM
+        self.thread_scratch = [self.scratch]
+        if self.split:
+            self.thread_scratch += [thread_scratch(self.scratch) for _ in range(threads - 1)]
+        else:
+            threads = max(1, min(threads, runs))
         count = min(runs, threads * _GROUPS_PER_THREAD) if threads > 1 else 1
         # contiguous blocks of runs: a thread's runs share cache lines with few of another's
         self.groups = [block.astype(np.int64) for block in np.array_split(np.arange(runs), count)]
@@ -224,11 +247,46 @@ class _Batch:
             self.scratch,
         )
 
+    def _at_once(self, kernel: Callable[..., None], calls: list[tuple[Any, ...]]) -> None:
+        """``kernel(*arguments)`` for every tuple of ``calls`` on the threads; the first here."""
+        assert self.pool is not None
+        futures = [self.pool.submit(kernel, *arguments) for arguments in calls[1:]]
+        kernel(*calls[0])
+        for future in futures:
+            future.result()
+
+    def _split_run(self, r: int, stop: int, turns: np.ndarray, first: int) -> None:
+        """Run ``r`` tick by tick to ``stop``, its end, or a full event buffer (``_split``)."""
+        w, k, x, s = self.world, self.constants, self.scratch, self.streams
+        room = (k.robots + k.pickup_slots.shape[0]) * EVENT_SLOTS
+        parts = len(self.thread_scratch)
+        robots = _ranges(k.robots, parts)
+        while w.ended_at[r] < 0 and w.run_tick[r] < stop and x.failure[r] == 0:
+            if x.event_count[r] + room > x.event_tick.shape[1]:
+                return
+            t = int(w.run_tick[r]) + 1
+            row = t - first if k.walk_turn_ticks > 0 else 0
+            split_begin(r, t, s.motion[r], s.breakdown[r], s.radio[r], s.camera[r], w, k, x)
+            self._at_once(
+                split_robots,
+                [
+                    (r, t, lo, hi, turns, row, w, k, own)
+                    for (lo, hi), own in zip(robots, self.thread_scratch, strict=True)
+                ],
+            )
+            count = split_collide_begin(r, w, k, x)
+            pieces = zip(_ranges(count, parts), self.thread_scratch, strict=True)
+            self._at_once(split_collide, [(r, lo, hi, w, k, own) for (lo, hi), own in pieces])
+            split_finish(r, t, count, w, k, x)
+
     def advance_to(self, stop: int, turns: np.ndarray, first: int) -> None:
         """Every running run to tick ``stop`` (empties buffers a run filled on the way)."""
         world = self.world
         while True:
-            if self.pool is None:
+            if self.split:
+                for r in range(world.run_tick.shape[0]):
+                    self._split_run(r, stop, turns, first)
+            elif self.pool is None:
                 self._kernel(self.groups[0], stop, turns, first)
             else:
                 futures = [

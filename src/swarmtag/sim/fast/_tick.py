@@ -113,9 +113,31 @@ def tick_run(
 
     ``turns[r, row]`` are the tick's walk turns (when the walk turns).
     """
+    tick_begin(r, t, motion, breakdown, radio, camera, w, k, x)
     robots = k.robots
+    sense_robots(r, t, 0, robots, w, k, x)
+    break_down_robots(r, 0, robots, w, k, x)
+    decide_robots(r, t, 0, robots, turns, row, w, k, x)
+    move_robots(r, 0, robots, w, k, x)
+    resolve_run(r, w, k, x)
+    tick_end(r, t, w, k, x)
+
+
+@inlined
+def tick_begin(
+    r: int,
+    t: int,
+    motion: np.random.Generator,
+    breakdown: np.random.Generator,
+    radio: np.random.Generator,
+    camera: np.random.Generator,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """The tick's random numbers, the robots' start, the run's index and advertising tags."""
     _draw(r, motion, breakdown, radio, camera, k, x)
-    for n in range(robots):
+    for n in range(k.robots):
         x.before_mode[r, n] = w.mode[r, n]
         x.before_pos[r, n, 0] = w.robot_pos[r, n, 0]
         x.before_pos[r, n, 1] = w.robot_pos[r, n, 1]
@@ -123,11 +145,37 @@ def tick_run(
     index_robots(r, w, k, x)
     if k.split:
         tags_advertising(r, t, w, k, x)
-    sense_robots(r, t, 0, robots, w, k, x)
-    break_down_robots(r, 0, robots, w, k, x)
-    decide_robots(r, t, 0, robots, turns, row, w, k, x)
-    move_robots(r, 0, robots, w, k, x)
-    resolve_run(r, w, k, x)
+
+
+@inlined
+def tick_robots(
+    r: int,
+    t: int,
+    lo: int,
+    hi: int,
+    turns: np.ndarray,
+    row: int,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """Sense, break down, decide and move robots ``lo .. hi - 1``, one robot after another.
+
+    Each robot reads the run's state as the tick began and writes only its
+    own entries (and its event slots), so ranges of robots may run at once
+    on several threads, each with its own query buffers (``Scratch.near_*``).
+    """
+    for n in range(lo, hi):
+        sense_robots(r, t, n, n + 1, w, k, x)
+        break_down_robots(r, n, n + 1, w, k, x)
+        decide_robots(r, t, n, n + 1, turns, row, w, k, x)
+        move_robots(r, n, n + 1, w, k, x)
+
+
+@inlined
+def tick_end(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
+    """Every phase after the collisions: docking, lifts, deliveries, end of tick, orders."""
+    robots = k.robots
     arrive_run(r, 4 * t, w, k, x)
     dock_robots(r, 0, robots, w, x)
     lifted = answer_lifts(r, t, 4 * t + 2, w, k, x)

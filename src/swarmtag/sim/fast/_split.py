@@ -1,0 +1,102 @@
+"""One large run on several threads: a tick in five kernel calls, two of them split by robots.
+
+``_tick.tick_run`` does a run's tick in one call, and the runner spreads runs
+over threads. A batch of fewer runs than threads with many robots (one
+warehouse, a million robots) instead steps each tick as
+
+1. ``split_begin`` (one thread): the random numbers, the robots' start, the
+   run's index of obstacles and robots, the advertising tags;
+2. ``split_robots`` on ranges of robots at once: sense, break down, decide,
+   move (each robot reads the tick's start and writes only its own entries);
+3. ``split_collide_begin`` (one thread): bodies and the first collision
+   pass's robots;
+4. ``split_collide`` on ranges of those at once: the first pass's new
+   positions (it reads only the positions at the pass's start);
+5. ``split_finish`` (one thread): the first pass's update, the other passes
+   (few robots), and every phase after the collisions.
+
+Each thread's calls get a ``Scratch`` whose query buffers (``gathered``,
+``near_*``) are its own (``thread_scratch``); everything else is shared.
+The result is ``tick_run``'s, bit for bit: no sum changes its order.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._motion import collide_range, resolve_begin, resolve_finish
+from swarmtag.sim.fast._tick import tick_begin, tick_end, tick_robots
+
+__all__ = [
+    "split_begin",
+    "split_collide",
+    "split_collide_begin",
+    "split_finish",
+    "split_robots",
+    "thread_scratch",
+]
+
+
+def thread_scratch(x: Scratch) -> Scratch:
+    """``x`` with query buffers of its own, for a second thread on the same runs."""
+    return x._replace(
+        gathered=np.zeros_like(x.gathered),
+        near_carriers=np.zeros_like(x.near_carriers),
+        near_blockers=np.zeros_like(x.near_blockers),
+        near_robots=np.zeros_like(x.near_robots),
+    )
+
+
+@jit
+def split_begin(
+    r: int,
+    t: int,
+    motion: np.random.Generator,
+    breakdown: np.random.Generator,
+    radio: np.random.Generator,
+    camera: np.random.Generator,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """Step 1 of tick ``t`` of run ``r`` (see the module docs)."""
+    tick_begin(r, t, motion, breakdown, radio, camera, w, k, x)
+
+
+@jit
+def split_robots(
+    r: int,
+    t: int,
+    lo: int,
+    hi: int,
+    turns: np.ndarray,
+    row: int,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """Step 2 for robots ``lo .. hi - 1``."""
+    tick_robots(r, t, lo, hi, turns, row, w, k, x)
+
+
+@jit
+def split_collide_begin(r: int, w: World, k: Constants, x: Scratch) -> int:
+    """Step 3: returns how many robots the first collision pass computes."""
+    count: int = resolve_begin(r, w, k, x)
+    return count
+
+
+@jit
+def split_collide(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+    """Step 4 for the first pass's robots ``x.active[r, lo:hi]``."""
+    collide_range(r, lo, hi, w, k, x)
+
+
+@jit
+def split_finish(r: int, t: int, count: int, w: World, k: Constants, x: Scratch) -> None:
+    """Step 5: the rest of tick ``t``; the run's tick becomes ``t``."""
+    resolve_finish(r, count, w, k, x)
+    tick_end(r, t, w, k, x)
+    w.run_tick[r] = t
