@@ -135,6 +135,12 @@ class FloorMap:
         """Extent along y in metres."""
         return self.rows * self.cell
 
+    @property
+    def start_cells(self) -> NDArray[np.int64]:
+        """Flat indices (row by row) of the cells robots may start on: floor and drop-off cells."""
+        cells: NDArray[np.int64] = np.flatnonzero((self.kind == FLOOR) | (self.kind == DROPOFF))
+        return cells
+
     def cell_of(self, x: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """The (row, col) of the cells holding points (x, y), clipped into the map.
 

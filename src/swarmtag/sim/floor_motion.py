@@ -30,11 +30,11 @@ from swarmtag.sim.geometry import Float, contact_xy, segment_crosses_box
 
 __all__ = [
     "DIAGONALS",
+    "cells_of",
     "clear_of_shelves",
     "hidden_by_shelves",
     "inside_area",
     "keep_off_shelves",
-    "start_cells",
     "transport_waypoints",
 ]
 
@@ -44,8 +44,8 @@ DIAGONALS: tuple[tuple[int, int], ...] = ((-1, -1), (-1, 1), (1, -1), (1, 1))
 """(row, column) steps to the four diagonal neighbours, in the order their pushes apply."""
 
 
-def start_cells(floor: FloorMap, position: Float) -> tuple[Int, Int]:
-    """The (row, column) of the cell each position (..., 2) lies in."""
+def cells_of(floor: FloorMap, position: Float) -> tuple[Int, Int]:
+    """The (row, column) of the cell each position (..., 2) lies in (``FloorMap.cell_of``)."""
     return floor.cell_of(position[..., 0], position[..., 1])
 
 
@@ -116,8 +116,8 @@ def hidden_by_shelves(start: Float, end: Float, floor: FloorMap) -> NDArray[np.b
     only grazes a shelf's edge or corner is not blocked (the open square of
     ``geometry.segment_crosses_box``).
     """
-    row0, col0 = start_cells(floor, start)
-    row1, col1 = start_cells(floor, end)
+    row0, col0 = cells_of(floor, start)
+    row1, col1 = cells_of(floor, end)
     low_row, high_row = np.minimum(row0, row1), np.maximum(row0, row1)
     low_col, high_col = np.minimum(col0, col1), np.maximum(col0, col1)
     if start.shape[0] == 0:
@@ -139,6 +139,6 @@ def hidden_by_shelves(start: Float, end: Float, floor: FloorMap) -> NDArray[np.b
 
 def transport_waypoints(position: Float, destination: Int, floor: FloorMap) -> Float:
     """The next waypoint (..., 2) of robots at ``position`` going to ``destination`` (an index)."""
-    row, col = start_cells(floor, position)
+    row, col = cells_of(floor, position)
     waypoint: Float = floor.waypoint[destination, row, col]
     return waypoint

@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from swarmtag.sim._index import STILL_MODES, at_robots, in_modes, is_loaded
 from swarmtag.sim.broad_phase import Grid, build_grid, grid_pays, near_points, sorted_pairs
 from swarmtag.sim.floor_map import FloorMap
-from swarmtag.sim.floor_motion import keep_off_shelves, start_cells, transport_waypoints
+from swarmtag.sim.floor_motion import cells_of, keep_off_shelves, transport_waypoints
 from swarmtag.sim.geometry import (
     FACE_NORMALS,
     Float,
@@ -179,7 +179,7 @@ def _bodies(s: WorldState, params: Params) -> _Bodies:
         others = np.arange(carriers) != s.ghost[..., None]
         blocks = obstacle[:, None, :] & others & movable[..., None]
     empty = np.zeros((0,), dtype=np.int64)
-    start = (empty, empty) if params.floor is None else start_cells(params.floor, s.robot_pos)
+    start = (empty, empty) if params.floor is None else cells_of(params.floor, s.robot_pos)
     return _Bodies(
         extent=extent,
         radius=radius,

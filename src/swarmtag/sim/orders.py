@@ -76,7 +76,7 @@ def sample_warehouse_scene(params: Params, rng: np.random.Generator) -> Scene:
         )
         raise SimulationError(msg)
 
-    cells = np.flatnonzero((floor.kind == 0) | (floor.kind == 3))  # FLOOR, DROPOFF
+    cells = floor.start_cells
     chosen = cells[rng.permutation(cells.shape[0])[:robots]]
     row, col = np.divmod(chosen, floor.kind.shape[1])
     centre = np.stack(((col + 0.5) * floor.cell, (row + 0.5) * floor.cell), axis=-1)

@@ -80,6 +80,12 @@ class SimResult:
     trajectories: Trajectories | None = None
 
 
+def _run_ends(state: WorldState) -> Int:
+    """(R,) the tick each run ended (its last delivery or time limit), or the last tick run."""
+    end: Int = np.where(state.ended_at >= 0, state.ended_at, state.tick)
+    return end
+
+
 def carrier_log(state: WorldState, params: Params, *, seed: int) -> CarrierLog:
     """The per-carrier event log (SPEC §8.1) of ``state``: one row per carrier per run.
 
@@ -91,7 +97,7 @@ def carrier_log(state: WorldState, params: Params, *, seed: int) -> CarrierLog:
     """
     runs, carriers = state.status.shape
     scale = params.time_scale
-    end = np.where(state.ended_at >= 0, state.ended_at, state.tick)
+    end = _run_ends(state)
     keep = (state.due <= end[:, None]).reshape(-1)  # warehouse orders due later are not in the run
 
     def column(values: np.ndarray) -> np.ndarray:
@@ -169,7 +175,7 @@ def _result(
 ) -> SimResult:
     """The ``SimResult`` of a finished batch, whichever backend ran it."""
     delivered = (state.delivery_time >= 0).sum(axis=1)
-    end = np.where(state.ended_at >= 0, state.ended_at, state.tick)
+    end = _run_ends(state)
     orders = (state.due <= end[:, None]).sum(axis=1)  # every carrier in the lab
     stuck = (
         (state.status == TagStatus.PICKED_UP)
@@ -190,7 +196,7 @@ def _result(
         undelivered=(orders - delivered).astype(np.int64),
         stuck=stuck.astype(np.int64),
         breakdowns=breakdowns,
-        end_tick=np.where(state.ended_at >= 0, state.ended_at, state.tick),
+        end_tick=end,
         final_state=state,
         trajectories=None if recorder is None else recorder.finish(params, seed=seed, last=state),
     )

@@ -24,10 +24,10 @@ from typing import Final
 
 from swarmtag._checks import check_int, check_number
 from swarmtag.errors import ConfigError
-from swarmtag.sim.floor_map import DROPOFF, FLOOR, SHIPPED_MAPS, FloorMap, load_floor_map
+from swarmtag.sim.floor_map import SHIPPED_MAPS, FloorMap, load_floor_map
 from swarmtag.sim.groups import MAX_DURATION, MAX_LENGTH
 
-__all__ = ["MAX_ORDERS", "Warehouse", "floor_of", "start_cells"]
+__all__ = ["MAX_ORDERS", "Warehouse", "floor_of"]
 
 MAX_ORDERS: Final = 100_000
 """Most orders one warehouse run may pre-allocate (state is dense robot x order arrays)."""
@@ -143,15 +143,10 @@ class Warehouse:
                 f"{floor.pickup_slots.shape[0]} pick-up cells"
             )
             raise ConfigError(msg)
-        starts = start_cells(floor)
+        starts = floor.start_cells.size
         if robots > starts:
             msg = (
                 f"robots: {robots} do not fit on the floor of warehouse.map {self.map!r} "
                 f"(one robot per free cell: at most {starts})"
             )
             raise ConfigError(msg)
-
-
-def start_cells(floor: FloorMap) -> int:
-    """How many cells robots may start on: floor and drop-off cells (not shelves, not pick-up)."""
-    return int(((floor.kind == FLOOR) | (floor.kind == DROPOFF)).sum())

@@ -20,7 +20,7 @@ from swarmtag.sim.fast._grid import near
 from swarmtag.sim.fast._jit import inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
-__all__ = ["break_down_robots", "decide_robots", "to_walk"]
+__all__ = ["break_down_robots", "decide_robots", "is_loaded", "to_walk"]
 
 _WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
 _AWAITING = 1
@@ -30,7 +30,7 @@ _score = jit(kernel_score)
 
 
 @inlined
-def _loaded(mode: int, target: int) -> bool:
+def is_loaded(mode: int, target: int) -> bool:
     """``_index.is_loaded`` for one robot."""
     return (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and target >= 0
 
@@ -54,7 +54,7 @@ def break_down_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scrat
         mode = w.mode[r, n]
         if not (x.breakdown_draw[r, n] < k.breakdown) or mode == _BROKEN:
             continue
-        loaded = _loaded(mode, w.target[r, n])
+        loaded = is_loaded(mode, w.target[r, n])
         emit(r, n, _BREAKDOWN, w.target[r, n] if loaded else -1, np.nan, x)
         if not loaded:
             w.target[r, n] = -1

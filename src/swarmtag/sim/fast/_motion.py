@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from swarmtag.sim.fast._decide import is_loaded
 from swarmtag.sim.fast._floor import cell_of, keep_off_shelves, waypoint_of
 from swarmtag.sim.fast._geometry import (
     FACE_X,
@@ -102,7 +103,7 @@ def _bodies(r: int, w: World, k: Constants, x: Scratch) -> None:
     """Each robot's rounded box and whether it can be pushed (``motion._bodies``)."""
     for n in range(k.robots):
         mode = w.mode[r, n]
-        loaded = (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and w.target[r, n] >= 0
+        loaded = is_loaded(mode, w.target[r, n])
         x.extent[r, n] = k.carrier_half if loaded else 0.0
         x.radius[r, n] = 0.0 if loaded else k.robot_radius
         x.movable[r, n] = not (mode in (_CENTRE, _LIFT) or mode >= _RELEASE)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+from swarmtag.sim.fast._decide import is_loaded
 from swarmtag.sim.fast._docking import free_faces_run
 from swarmtag.sim.fast._floor import cell_of
 from swarmtag.sim.fast._geometry import contact
@@ -18,7 +19,6 @@ from swarmtag.sim.fast._layout import Constants, Scratch, World
 
 __all__ = ["place_orders_run"]
 
-_LIFT, _RELEASE, _BROKEN = 4, 6, 7
 _ARRIVE = 10
 """``EventKind.ARRIVE``."""
 
@@ -34,8 +34,7 @@ def _mark_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
     for n in range(k.robots):
         px = w.robot_pos[r, n, 0]
         py = w.robot_pos[r, n, 1]
-        mode = w.mode[r, n]
-        loaded = (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and w.target[r, n] >= 0
+        loaded = is_loaded(w.mode[r, n], w.target[r, n])
         extent = k.carrier_half if loaded else 0.0
         radius = 0.0 if loaded else k.robot_radius
         row, col = cell_of(px, py, k)
