@@ -187,9 +187,10 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         replace(LARGE, camera=Camera(range=0.3, occlusion="carriers+robots", memory=2.0)),
         replace(LARGE, perception="disc", detection_radius=2.0),
         replace(LARGE, realism=Realism(advertisement_loss=0.2, detection_noise=0.02)),
+        replace(LARGE, radio=Radio(range=0.8, interval=0.3)),  # the radio grid leaves tags out
         warehouse(120, 200, map="warehouse-hall", order_interval=0.5, initial_orders=40),
     ],
-    ids=["grids", "robots-occlude", "memory", "disc", "realism", "warehouse"],
+    ids=["grids", "robots-occlude", "memory", "disc", "realism", "short-radio", "warehouse"],
 )
 def test_large_swarms_agree(scenario):
     compare(scenario, Urgency(alpha=3.0), seed=21, runs=2)

@@ -17,6 +17,7 @@ from typing import Final, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag.sim.broad_phase import padding
 from swarmtag.sim.fast._grid import table_bits
 from swarmtag.sim.floor_map import PICKUP
 from swarmtag.sim.params import Params
@@ -152,6 +153,10 @@ class Constants(NamedTuple):
     """Find each robot's neighbours with the grid (many robots) rather than a scan."""
     sight_cell: float
     """Side of a coarse grid cell: the camera's range (at least ``grid_cell``)."""
+    radio_grid: bool
+    """Find the advertising tags each robot may hear with a grid (many carriers, split)."""
+    radio_cell: float
+    """Side of a radio grid cell: the radio's range, padded against rounding."""
     arena_height: float
     has_floor: bool
     """A warehouse floor (the ``floor_*`` arrays and ``pickup_slots``); else the lab arena."""
@@ -234,6 +239,13 @@ class Scratch(NamedTuple):
     """(R, buckets + 1) the robots' coarse grid at the tick's start (robots hide carriers)."""
     crowd_items: I8
     """(R, N) the robots' coarse grid: robot ids, bucket by bucket."""
+    radio_x: F8
+    """(R, C) the advertising tags' x, in ``advertising`` order (radio grid)."""
+    radio_y: F8
+    radio_start: I8
+    """(R, buckets + 1) the advertising tags' grid (cells as wide as the radio's range)."""
+    radio_items: I8
+    """(R, C) the advertising tags' grid: positions in ``advertising``, bucket by bucket."""
     robot_keys: I8
     """(R, N) working space of a robot grid's ``fill``."""
     carrier_keys: I8
@@ -310,6 +322,7 @@ def constants_of(params: Params) -> Constants:
     half, radius = params.carrier_half, params.robot_radius
     cell = max(2 * half, half + radius, 2 * radius)
     sight = max(cell, params.camera_range)
+    radio_scale = max(params.arena, params.arena_height)
     return Constants(
         robots=params.robots,
         carriers=params.carriers,
@@ -355,6 +368,8 @@ def constants_of(params: Params) -> Constants:
         obstacle_grid=params.carriers > GRID_FROM,
         robot_grid=params.robots > GRID_FROM,
         sight_cell=sight,
+        radio_grid=params.split and params.memory_ticks == 0 and params.carriers > GRID_FROM,
+        radio_cell=padding(params.radio_range, radio_scale),
         arena_height=params.arena_height,
         has_floor=floor is not None,
         floor_cell=floor_cell,
@@ -444,6 +459,10 @@ def scratch_for(
         sight_items=np.zeros(c, dtype=np.int64),
         crowd_start=np.zeros((runs, robot_buckets), dtype=np.int64),
         crowd_items=np.zeros(n, dtype=np.int64),
+        radio_x=floats(*c),
+        radio_y=floats(*c),
+        radio_start=np.zeros((runs, carrier_buckets), dtype=np.int64),
+        radio_items=np.zeros(c, dtype=np.int64),
         robot_keys=np.zeros(n, dtype=np.int64),
         carrier_keys=np.zeros(c, dtype=np.int64),
         gathered=np.zeros((runs, max(robots, carriers)), dtype=np.int64),

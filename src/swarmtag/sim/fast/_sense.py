@@ -14,7 +14,7 @@ import math
 
 from swarmtag.sim.fast._floor import hidden_by_shelves
 from swarmtag.sim.fast._geometry import segment_crosses_box, segment_near_point
-from swarmtag.sim.fast._grid import near
+from swarmtag.sim.fast._grid import fill, near
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
@@ -41,6 +41,22 @@ def tags_advertising(r: int, t: int, w: World, k: Constants, x: Scratch) -> None
             x.advertising[r, count] = c
             count += 1
     x.advertising_count[r] = count
+    if k.radio_grid:
+        for i in range(count):
+            c = x.advertising[r, i]
+            x.radio_x[r, i] = w.carrier_pos[r, c, 0]
+            x.radio_y[r, i] = w.carrier_pos[r, c, 1]
+        fill(
+            r,
+            x.radio_x,
+            x.radio_y,
+            count,
+            k.radio_cell,
+            k.carrier_bits,
+            x.radio_start,
+            x.radio_items,
+            x.carrier_keys,
+        )
 
 
 @inlined
@@ -180,8 +196,22 @@ def _hear(r: int, n: int, t: int, slot: int, w: World, k: Constants, x: Scratch)
     """Robot ``n`` hears this tick's advertisements in range (split perception)."""
     rx = w.robot_pos[r, n, 0]
     ry = w.robot_pos[r, n, 1]
-    for i in range(x.advertising_count[r]):
-        c = x.advertising[r, i]
+    count = x.advertising_count[r]
+    if k.radio_grid:  # the tags in the cells around: the order of hearing changes nothing
+        count = near(
+            r,
+            rx,
+            ry,
+            k.radio_cell,
+            k.radio_cell,
+            k.carrier_bits,
+            x.radio_start,
+            x.radio_items,
+            x.near_carriers,
+            False,
+        )
+    for i in range(count):
+        c = x.advertising[r, x.near_carriers[r, i] if k.radio_grid else i]
         ox = w.carrier_pos[r, c, 0] - rx
         oy = w.carrier_pos[r, c, 1] - ry
         if not math.sqrt(ox * ox + oy * oy) <= k.radio_range:
