@@ -11,7 +11,9 @@ deliveries and the mean latency (a sanity check that the floor works, not a resu
 - ``2k`` and ``10k``: one run on a generated map (``generated_map``: bays of a double
   shelf row between two aisles, three pick-up slots and two drop-off cells each, four
   destinations spread over the bays) with about four free cells per robot, 1200 ticks
-  (2 min).
+  (2 min);
+- ``100k`` (300 ticks) and ``1M`` (100 ticks): the same on larger generated maps. The
+  time includes reading the map (routes to every destination) and the start state.
 
 Order intervals are set so that the robots are busy without the pick-up area staying full
 (about one order per robot per 400 s: the lab profile's robots drive 0.12 m/s and
@@ -88,6 +90,8 @@ CASES = (
     Case("hall", 60, 4, 6000, "warehouse-hall"),
     Case("2k", 2000, 1, 1200, "generated"),
     Case("10k", 10000, 1, 1200, "generated"),
+    Case("100k", 100_000, 1, 300, "generated"),
+    Case("1M", 1_000_000, 1, 100, "generated"),
 )
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,7 +24,7 @@ from swarmtag.sim.scenario import Scenario
 from swarmtag.sim.sensors import OCCLUSION_MODELS
 from swarmtag.sim.warehouse import floor_of
 
-__all__ = ["Params", "make_params"]
+__all__ = ["FIRST_CACHE_CAPACITY", "Params", "make_params", "sparse_tag_cache"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,11 +101,36 @@ class Params:
     """The arena's extent in y (``arena`` in the lab; the map's height in a warehouse)."""
     floor: FloorMap | None
     """The warehouse floor (shelves, pick-up and drop-off cells); None in the lab arena."""
+    sparse_tag_cache: bool
+    """The compiled kernel keeps each robot's tag cache as a short list (``sparse_tag_cache``)."""
 
     @property
     def condition(self) -> str:
         """The policy's canonical condition name (SPEC §8.1)."""
         return self.policy.name
+
+
+FIRST_CACHE_CAPACITY: Final = 64
+"""Entries of each robot's sparse tag cache the compiled kernel tries first."""
+
+
+def sparse_tag_cache(scenario: Scenario) -> bool:
+    """Whether the compiled kernel keeps ``scenario``'s robots' tag caches as short lists.
+
+    With split perception and neither sighting memory nor the per-pair
+    radio or camera draws of advertisement loss and camera noise
+    (``sim/fast/_tag_cache.py``): a dense cache per robot and carrier grows
+    with robots times carriers (in a warehouse, times orders), and the lists
+    give the same event logs. The compiled backend's states then carry no
+    dense caches.
+    """
+    realism = scenario.realism
+    return (
+        scenario.perception == "split"
+        and scenario.camera.memory == 0
+        and realism.advertisement_loss == 0
+        and realism.detection_noise == 0
+    )
 
 
 def make_params(scenario: Scenario, policy: Policy) -> Params:
@@ -189,4 +215,5 @@ def make_params(scenario: Scenario, policy: Policy) -> Params:
         markers=markers,
         arena_height=height,
         floor=floor,
+        sparse_tag_cache=sparse_tag_cache(scenario),
     )

@@ -27,7 +27,7 @@ from swarmtag.sim.control import Controller
 from swarmtag.sim.events import EventKind, EventRecorder
 from swarmtag.sim.invariants import check_tick
 from swarmtag.sim.kernel import step
-from swarmtag.sim.params import Params, make_params
+from swarmtag.sim.params import FIRST_CACHE_CAPACITY, Params, make_params, sparse_tag_cache
 from swarmtag.sim.randomness import RandomSource, TickInputs, check_seed
 from swarmtag.sim.scenario import Scenario
 from swarmtag.sim.scene import sample_scene
@@ -202,6 +202,46 @@ def _result(
     )
 
 
+def _simulate_fast(
+    scenario: Scenario,
+    params: Params,
+    *,
+    seed: int,
+    runs: int,
+    run_offset: int,
+    record: bool,
+    check: bool,
+    threads: int | None,
+) -> SimResult:
+    """``simulate`` on the compiled backend.
+
+    A batch whose sparse tag caches overflow (``sim/fast/_tag_cache.py``)
+    starts again from its seeded start with twice the room (if it fits in
+    memory): the same bytes.
+    """
+    from swarmtag.sim.fast import TagCacheFull, simulate_fast  # noqa: PLC0415 - numba is an extra
+
+    capacity = None
+    while True:
+        state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset, backend="fast")
+        try:
+            final, events, breakdowns, recorder = simulate_fast(
+                state, params, seed=seed, record=record, check=check, threads=threads,
+                adopt=True, cache_capacity=capacity,
+            )  # fmt: skip
+        except TagCacheFull as full:
+            capacity = full.capacity
+            need = batch_memory(
+                scenario, runs, record=record, backend="fast", cache_capacity=capacity
+            )
+            what = f"{runs} runs of {params.robots} robots with {capacity} tag cache entries each"
+            check_memory(what, need, error=ConfigError)
+            continue
+        return _result(
+            final, params, seed=seed, events=events, breakdowns=breakdowns, recorder=recorder
+        )
+
+
 CONTROLLERS: Final = ("builtin", "bt")
 """Controllers ``simulate`` can run: the vectorised built-in one, the behaviour trees."""
 MAX_THREADS: Final = 1024
@@ -246,7 +286,12 @@ event rows (~1000 B) and the CSV text while writing (measured: docs/reliability.
 
 
 def batch_memory(
-    scenario: Scenario, runs: int, *, record: bool = False, backend: str = "reference"
+    scenario: Scenario,
+    runs: int,
+    *,
+    record: bool = False,
+    backend: str = "reference",
+    cache_capacity: int | None = None,
 ) -> float:
     """Estimated peak bytes of simulating ``runs`` runs of ``scenario`` in one batch.
 
@@ -255,20 +300,29 @@ def batch_memory(
     broad phase (~75-200 B per pair), robot-carrier distances, per-body
     state, the advertisement delay buffer and, when recording, every tick's
     poses. Fast: the state's robot-carrier arrays (42 B per pair) and the
-    kernel's (24 B, 48 more with advertisement loss or camera noise), the
-    start state's free-face test (~400 B per carrier pair, or ~1.8 kB per
-    carrier with its grid, measured), per-body state,
-    grids and event buffers (docs/performance.md measures it).
+    kernel's (24 B, 48 more with advertisement loss or camera noise), or
+    with sparse tag caches 34 B per entry (``cache_capacity`` of them per
+    robot, by default the first capacity the kernel tries), the start
+    state's free-face test (~400 B per carrier pair, or ~1.8 kB per carrier
+    with its grid, measured), per-body state, grids and event buffers
+    (docs/performance.md measures it).
     """
     robots, carriers = scenario.robots, scenario.carriers
     if backend == "fast":
         realism = scenario.realism
-        pair = 66.0 + (48.0 if realism.advertisement_loss or realism.detection_noise else 0.0)
+        if sparse_tag_cache(scenario):
+            entries = FIRST_CACHE_CAPACITY if cache_capacity is None else cache_capacity
+            if scenario.warehouse is None:
+                entries = min(entries, carriers + 2)
+            caches = 34.0 * robots * entries
+        else:
+            pair = 66.0 + (48.0 if realism.advertisement_loss or realism.detection_noise else 0.0)
+            caches = pair * robots * carriers
         free = (  # the start state's free faces: a grid from a few dozen carriers on
             2000.0 * carriers if grid_pays("free", 4 * carriers, carriers) else 400.0 * carriers**2
         )
         per_run = (
-            pair * robots * carriers
+            caches
             + free
             + 1000.0 * robots
             + 600.0 * carriers
@@ -307,7 +361,8 @@ def seeded_state(
         scenes = seeded_scenes(params, seed=seed, run_ids=run_ids.tolist())
     else:
         scenes = [sample_scene(params, seed=seed, run=int(run)) for run in run_ids]
-    return initial_state(params, scenes, run_ids)
+    sparse = backend == "fast" and params.sparse_tag_cache
+    return initial_state(params, scenes, run_ids, dense_caches=not sparse)
 
 
 def simulate(
@@ -355,16 +410,12 @@ def simulate(
         error=ConfigError,
     )
     params = make_params(scenario, policy)
-    state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset, backend=backend)
     if backend == "fast":
-        from swarmtag.sim.fast import simulate_fast  # noqa: PLC0415 - numba is an extra
-
-        final, events, breakdowns, recorder = simulate_fast(
-            state, params, seed=seed, record=record, check=check, threads=threads, adopt=True
-        )
-        return _result(
-            final, params, seed=seed, events=events, breakdowns=breakdowns, recorder=recorder
-        )
+        return _simulate_fast(
+            scenario, params, seed=seed, runs=runs, run_offset=run_offset, record=record,
+            check=check, threads=threads,
+        )  # fmt: skip
+    state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset, backend=backend)
     source = RandomSource(params, seed=seed, run_ids=state.run_ids)
     if controller == "builtin":
         return run_batch(state, params, source, seed=seed, record=record, check=check)

@@ -312,15 +312,20 @@ def _check_scene(scene: Scene, params: Params, position: int) -> None:
         raise ConfigError(msg)
 
 
-def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -> WorldState:
+def initial_state(
+    params: Params, scenes: Sequence[Scene], run_ids: ArrayLike, *, dense_caches: bool = True
+) -> WorldState:
     """The state at time 0 of a batch: one scene per run, ``run_ids`` their global indices.
 
     Robots start in random walk along their heading, knowing no tag; tags
-    advertise their initial state.
+    advertise their initial state. Without ``dense_caches`` the arrays per
+    robot and carrier are empty (no carriers on their last axis): for the
+    compiled kernel's sparse tag caches (``Params.sparse_tag_cache``).
     """
     for position, scene in enumerate(scenes):
         _check_scene(scene, params, position)
     runs, n, c = len(scenes), params.robots, params.carriers
+    pairs = (runs, n, c if dense_caches else 0)
     ids = np.array(run_ids, dtype=np.int64).reshape(-1)
     if ids.shape != (runs,):
         msg = f"run_ids: {ids.shape[0]} ids for {runs} scenes"
@@ -368,12 +373,12 @@ def initial_state(params: Params, scenes: Sequence[Scene], run_ids: ArrayLike) -
         sidestep=robots(0),
         sidestep_dir=np.zeros((runs, n, 2)),
         goal=np.zeros((runs, n, 2)),
-        blocked_until=np.zeros((runs, n, c), dtype=np.int64),
-        known_status=np.full((runs, n, c), -1, dtype=np.int8),
-        known_urgency=np.zeros((runs, n, c), dtype=np.int8),
-        heard_tick=np.full((runs, n, c), -1, dtype=np.int64),
-        seen_tick=np.full((runs, n, c), -1, dtype=np.int64),
-        seen_pos=np.zeros((runs, n, c, 2)),
+        blocked_until=np.zeros(pairs, dtype=np.int64),
+        known_status=np.full(pairs, -1, dtype=np.int8),
+        known_urgency=np.zeros(pairs, dtype=np.int8),
+        heard_tick=np.full(pairs, -1, dtype=np.int64),
+        seen_tick=np.full(pairs, -1, dtype=np.int64),
+        seen_pos=np.zeros((*pairs, 2)),
         walk_clock=robots(0),
         carrier_pos=carrier_pos,
         status=status,

@@ -11,10 +11,10 @@ through ``swarmtag.sim.simulate(..., backend="fast")`` or after checking
 from __future__ import annotations
 
 from swarmtag.sim.fast._jit import discard_stale_machine_code
-from swarmtag.sim.fast._runner import kernel_compiled, simulate_fast
+from swarmtag.sim.fast._runner import TagCacheFull, kernel_compiled, simulate_fast
 from swarmtag.sim.fast._scene import seeded_scenes
 from swarmtag.sim.fast._tick import advance
 
 discard_stale_machine_code(advance)  # before anything loads it
 
-__all__ = ["kernel_compiled", "seeded_scenes", "simulate_fast"]
+__all__ = ["TagCacheFull", "kernel_compiled", "seeded_scenes", "simulate_fast"]

@@ -19,6 +19,7 @@ from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, away_from, norm
 from swarmtag.sim.fast._grid import near
 from swarmtag.sim.fast._jit import inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._tag_cache import block, known_blocked_until, known_status, known_urgency
 
 __all__ = ["break_down_robots", "decide_robots", "is_loaded", "to_walk"]
 
@@ -134,13 +135,13 @@ def _pursuit_check(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -
     if not _PREDOCK <= mode <= _CENTRE:
         return
     target = w.target[r, n]
-    heard = w.known_status[r, n, max(target, 0)]
+    heard = known_status(r, n, max(target, 0), w, k)
     if heard != _AWAITING:
         emit(r, n, _ABANDON, target, float(heard), x)
         to_walk(r, n, w)
     elif t - w.pursuit_start[r, n] >= k.timeout_ticks:
         emit(r, n, _TIMEOUT, target, np.nan, x)
-        w.blocked_until[r, n, target] = t + k.cooldown_ticks
+        block(r, n, target, t + k.cooldown_ticks, w, k)
         to_walk(r, n, w)
 
 
@@ -173,8 +174,8 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     for i in range(x.seen_count[r, n]):
         c = x.seen_list[r, n, i]
         if not (
-            w.known_status[r, n, c] == _AWAITING
-            and w.blocked_until[r, n, c] <= t
+            known_status(r, n, c, w, k) == _AWAITING
+            and known_blocked_until(r, n, c, w, k) <= t
             and (
                 w.free_face[r, c, 0]
                 or w.free_face[r, c, 1]
@@ -185,7 +186,8 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
             continue
         count += 1
         distance = x.seen_distance[r, n, i]
-        score = _score(k.policy_kind, k.policy_parameter, float(w.known_urgency[r, n, c]), distance)
+        urgency = float(known_urgency(r, n, c, w, k))
+        score = _score(k.policy_kind, k.policy_parameter, urgency, distance)
         # the largest score, then the smaller distance, then the smaller marker, in any order
         if (
             best < 0
@@ -205,7 +207,7 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
         open_face = _nearest_face(r, n, best, True, w, k, x)
         if open_face >= 0:
             face = open_face
-    emit(r, n, _SELECT, best, float(w.known_urgency[r, n, best]), x)
+    emit(r, n, _SELECT, best, float(known_urgency(r, n, best, w, k)), x)
     emit(r, n, _CANDIDATES, best, float(count), x)
     w.mode[r, n] = _PREDOCK
     w.target[r, n] = best

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from swarmtag.sim.broad_phase import padding
 from swarmtag.sim.fast._grid import table_bits
 from swarmtag.sim.floor_map import PICKUP
-from swarmtag.sim.params import Params
+from swarmtag.sim.params import FIRST_CACHE_CAPACITY, Params
 from swarmtag.sim.state import WorldState
 
 __all__ = [
@@ -98,6 +98,25 @@ class World(NamedTuple):
     destination: I8
     slot: I8
     slot_pick: F8
+    cache_count: I8
+    """(R, N) entries in each robot's sparse tag cache (``_tag_cache``; the kernel's own)."""
+    cache_carrier: I8
+    """(R, N, K) the carrier of each entry (in no order); K is 0 with dense caches."""
+    cache_status: S1
+    cache_urgency: S1
+    cache_blocked: I8
+    """(R, N, K) the first tick at which the robot may select the entry's carrier again."""
+
+
+_KERNEL_ONLY: Final = (
+    "run_tick",
+    "cache_count",
+    "cache_carrier",
+    "cache_status",
+    "cache_urgency",
+    "cache_blocked",
+)
+"""``World`` fields that are not ``WorldState``'s."""
 
 
 class Constants(NamedTuple):
@@ -157,6 +176,10 @@ class Constants(NamedTuple):
     """Find the advertising tags each robot may hear with a grid (many carriers, split)."""
     radio_cell: float
     """Side of a radio grid cell: the radio's range, padded against rounding."""
+    sparse_cache: bool
+    """Robots keep their tag caches as short lists (``Params.sparse_tag_cache``)."""
+    cache_capacity: int
+    """Entries of a sparse tag cache (``World.cache_*``); 0 with dense caches."""
     arena_height: float
     has_floor: bool
     """A warehouse floor (the ``floor_*`` arrays and ``pickup_slots``); else the lab arena."""
@@ -295,10 +318,29 @@ def policy_code(params: Params) -> tuple[int, float]:
     return kind, parameter
 
 
-def constants_of(params: Params) -> Constants:
+def cache_capacity_for(params: Params) -> int:
+    """The first capacity of ``params``' sparse tag caches; 0 where they are dense.
+
+    At most the places a carrier can stand on the floor (the pick-up slots
+    of a warehouse, every carrier in the lab) + 2, which never overflows
+    (``_tag_cache``).
+    """
+    if not params.sparse_tag_cache:
+        return 0
+    return min(FIRST_CACHE_CAPACITY, cache_bound(params))
+
+
+def cache_bound(params: Params) -> int:
+    """Entries a sparse tag cache never needs more of (``_tag_cache``)."""
+    places = params.carriers if params.floor is None else len(params.floor.pickup_slots)
+    return places + 2
+
+
+def constants_of(params: Params, cache_capacity: int = 0) -> Constants:
     """The kernel's constants for ``params`` (writable copies of the floor's arrays).
 
     The lab arena gets one-cell dummies of the same types, so both compile to one kernel.
+    ``cache_capacity``: entries of each robot's sparse tag cache (``Params.sparse_tag_cache``).
     """
     kind, parameter = policy_code(params)
     floor = params.floor
@@ -370,6 +412,8 @@ def constants_of(params: Params) -> Constants:
         sight_cell=sight,
         radio_grid=params.split and params.memory_ticks == 0 and params.carriers > GRID_FROM,
         radio_cell=padding(params.radio_range, radio_scale),
+        sparse_cache=params.sparse_tag_cache,
+        cache_capacity=cache_capacity if params.sparse_tag_cache else 0,
         arena_height=params.arena_height,
         has_floor=floor is not None,
         floor_cell=floor_cell,
@@ -384,33 +428,50 @@ def constants_of(params: Params) -> Constants:
     )
 
 
-def world_of(state: WorldState, *, copy: bool = True) -> World:
-    """The kernel's view of ``state`` (a copy unless ``copy`` is false): every run at its tick."""
+def world_of(state: WorldState, *, copy: bool = True, cache_capacity: int = 0) -> World:
+    """The kernel's view of ``state`` (a copy unless ``copy`` is false): every run at its tick.
+
+    Each robot's sparse tag cache starts empty with room for ``cache_capacity`` entries.
+    """
     source = state.copy() if copy else state
     arrays = {
         f.name: getattr(source, f.name) for f in fields(WorldState) if f.name in World._fields
     }
-    return World(run_tick=np.full(state.runs, state.tick, dtype=np.int64), **arrays)
+    entries = (state.runs, state.robot_pos.shape[1], cache_capacity)
+    return World(
+        run_tick=np.full(state.runs, state.tick, dtype=np.int64),
+        cache_count=np.zeros(entries[:2], dtype=np.int64),
+        cache_carrier=np.full(entries, -1, dtype=np.int64),
+        cache_status=np.zeros(entries, dtype=np.int8),
+        cache_urgency=np.zeros(entries, dtype=np.int8),
+        cache_blocked=np.zeros(entries, dtype=np.int64),
+        **arrays,
+    )
 
 
 def state_of(world: World, template: WorldState) -> WorldState:
     """``world``'s arrays as a ``WorldState`` (no copy) at the latest tick any run reached."""
-    arrays = {name: getattr(world, name) for name in World._fields if name != "run_tick"}
+    arrays = {name: getattr(world, name) for name in World._fields if name not in _KERNEL_ONLY}
     tick = int(world.run_tick.max()) if world.run_tick.size else template.tick
     return replace(template, tick=tick, **arrays)
 
 
-def scratch_for(
-    runs: int, robots: int, carriers: int, capacity: int, gridded: bool, slots: int = 1
-) -> Scratch:
-    """Working space for ``runs`` runs: event buffers of ``capacity`` rows, hash tables.
+def scratch_for(runs: int, k: Constants, capacity: int) -> Scratch:
+    """Working space for ``runs`` runs of ``k``: event buffers of ``capacity`` rows, hash tables.
 
-    The tables (``_grid``) get their full size only where a grid is used (``gridded``).
+    The tables (``_grid``) get their full size only where a grid is used, the
+    per-pair draws only where realism draws them, and the lists of carriers a
+    robot knows this tick as many entries as its tag cache can hold.
     """
+    robots, carriers, slots = k.robots, k.carriers, k.pickup_slots.shape[0]
+    gridded = k.obstacle_grid or k.robot_grid
     robot_buckets = 4 ** table_bits(robots) + 1 if gridded else 1
     carrier_buckets = 4 ** table_bits(carriers) + 1 if gridded else 1
     n, c = (runs, robots), (runs, carriers)
-    nc = (runs, robots, carriers)
+    known = (runs, robots, k.cache_capacity if k.sparse_cache else carriers)
+    memo = (runs, robots, 0 if k.sparse_cache else carriers)
+    lost = (runs, robots, carriers if k.advertisement_loss > 0 else 0)
+    noisy = (runs, robots, carriers if k.detection_noise > 0 else 0)
 
     def floats(*shape: int) -> F8:
         return np.zeros(shape, dtype=np.float64)
@@ -421,12 +482,12 @@ def scratch_for(
         walk_in=floats(*n, 2),
         sidestep_in=floats(*n, 2),
         breakdown_draw=floats(*n),
-        radio_draw=floats(*nc),
-        noise=floats(*nc, 2),
+        radio_draw=floats(*lost),
+        noise=floats(*noisy, 2),
         seen_count=np.zeros(n, dtype=np.int64),
-        seen_list=np.zeros(nc, dtype=np.int64),
-        seen_distance=floats(*nc),
-        blocker=np.full(nc, -1, dtype=np.int64),
+        seen_list=np.zeros(known, dtype=np.int64),
+        seen_distance=floats(*known),
+        blocker=np.full(memo, -1, dtype=np.int64),
         proposed=floats(*n, 2),
         x=floats(*n),
         y=floats(*n),

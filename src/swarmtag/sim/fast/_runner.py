@@ -30,8 +30,11 @@ from swarmtag.sim.events import EventKind, EventRecorder, RobotEvents, TickEvent
 from swarmtag.sim.fast._docking import FAILURE_LOWERED, FAILURE_NOT_PICKED_UP
 from swarmtag.sim.fast._layout import (
     EVENT_SLOTS,
+    Constants,
     Scratch,
     World,
+    cache_bound,
+    cache_capacity_for,
     constants_of,
     scratch_for,
     state_of,
@@ -45,6 +48,7 @@ from swarmtag.sim.fast._split import (
     split_robots,
     thread_scratch,
 )
+from swarmtag.sim.fast._tag_cache import FAILURE_CACHE_FULL
 from swarmtag.sim.fast._tick import advance
 from swarmtag.sim.invariants import check_tick
 from swarmtag.sim.params import Params
@@ -53,15 +57,23 @@ from swarmtag.sim.state import WorldState
 from swarmtag.sim.trajectories import TrajectoryRecorder
 from swarmtag.sim.wms import operator_writes
 
-__all__ = ["default_threads", "kernel_compiled", "simulate_fast"]
+__all__ = ["TagCacheFull", "default_threads", "kernel_compiled", "simulate_fast"]
 
 _WORK_PER_CALL: Final = 1_000_000
 """Robot-ticks per kernel call at most (0.1-0.25 s; at least a tick): bounds Ctrl-C latency."""
 _MAX_TICKS_PER_CALL: Final = 4096
 _GROUPS_PER_THREAD: Final = 4
+"""Runs go to the threads in this many groups per thread (runs end at different ticks)."""
 SPLIT_FROM: Final = 10_000
 """Robots of a run from which a batch of fewer runs than threads splits each tick's robots."""
-"""Runs go to the threads in this many groups per thread (runs end at different ticks)."""
+
+
+class TagCacheFull(Exception):
+    """A robot's sparse tag cache overflowed: the batch must start again with ``capacity``."""
+
+    def __init__(self, capacity: int) -> None:
+        super().__init__(f"a sparse tag cache needs {capacity} entries")
+        self.capacity = capacity
 
 
 def kernel_compiled() -> bool:
@@ -138,16 +150,17 @@ def _flush(x: Scratch, recorder: EventRecorder, breakdowns: np.ndarray) -> None:
     counts = x.event_count
     if not counts.any():
         return
-    rows = np.arange(x.event_tick.shape[1])[None, :] < counts[:, None]
-    runs = np.nonzero(rows)[0]
-    kinds = x.event_kind[rows].astype(np.int64)
+    # each run's first rows, run by run: O(events), however large the buffers
+    runs = np.repeat(np.arange(counts.shape[0]), counts)
+    rows = np.arange(runs.shape[0]) - np.repeat(np.cumsum(counts) - counts, counts)
+    kinds = x.event_kind[runs, rows].astype(np.int64)
     recorder.add_rows(
         runs,
-        x.event_tick[rows],
+        x.event_tick[runs, rows],
         kinds,
-        carriers=x.event_carrier[rows],
-        robots=x.event_robot[rows],
-        values=x.event_value[rows],
+        carriers=x.event_carrier[runs, rows],
+        robots=x.event_robot[runs, rows],
+        values=x.event_value[runs, rows],
     )
     breakdowns += np.bincount(runs[kinds == EventKind.BREAKDOWN], minlength=breakdowns.shape[0])
     counts[:] = 0
@@ -172,11 +185,20 @@ def _tick_events(x: Scratch, shape: tuple[int, int]) -> TickEvents:
     return result
 
 
-def _raise_failure(x: Scratch, world: World) -> None:
-    """A ``SimulationError`` for a run in which the kernel refused a release."""
+def _raise_failure(x: Scratch, world: World, k: Constants, bound: int) -> None:
+    """A ``SimulationError`` for a run in which the kernel refused a release.
+
+    ``TagCacheFull`` where a sparse tag cache overflowed instead (twice the room,
+    at most ``bound``).
+    """
     failed = np.flatnonzero(x.failure)
     if failed.size == 0:
         return
+    if (x.failure == FAILURE_CACHE_FULL).any():
+        if k.cache_capacity >= bound:  # never: at most a carrier per place and the target stay
+            msg = f"a tag cache of {k.cache_capacity} entries overflowed (bound {bound})"
+            raise SimulationError(msg)
+        raise TagCacheFull(min(2 * k.cache_capacity, bound))
     row = int(failed[0])
     tick = int(world.run_tick[row]) + 1
     if x.failure[row] == FAILURE_NOT_PICKED_UP:
@@ -194,23 +216,22 @@ class _Batch:
     """One seeded batch in the compiled kernel: its arrays, streams, events and threads."""
 
     def __init__(
-        self, state: WorldState, params: Params, seed: int, threads: int, *, adopt: bool
+        self,
+        state: WorldState,
+        params: Params,
+        seed: int,
+        threads: int,
+        *,
+        adopt: bool,
+        cache_capacity: int,
     ) -> None:
         runs, robots = state.runs, params.robots
         self.template = state
         self.params = params
-        self.world = world_of(state, copy=not adopt)
-        self.constants = constants_of(params)
+        self.world = world_of(state, copy=not adopt, cache_capacity=cache_capacity)
+        self.constants = constants_of(params, cache_capacity)
         k = self.constants
-        gridded = k.obstacle_grid or k.robot_grid
-        self.scratch = scratch_for(
-            runs,
-            robots,
-            params.carriers,
-            capacity=_capacity(robots, k.pickup_slots.shape[0]),
-            gridded=gridded,
-            slots=k.pickup_slots.shape[0],
-        )
+        self.scratch = scratch_for(runs, k, _capacity(robots, k.pickup_slots.shape[0]))
         self.streams = _Streams(params, seed, [int(run) for run in state.run_ids])
         self.events = EventRecorder()
         self.breakdowns = np.zeros(runs, dtype=np.int64)
@@ -294,7 +315,7 @@ class _Batch:
                 ]
                 for future in futures:
                     future.result()
-            _raise_failure(self.scratch, world)
+            _raise_failure(self.scratch, world, self.constants, cache_bound(self.params))
             if not ((world.ended_at < 0) & (world.run_tick < stop)).any():
                 return
             self.flush()  # a run paused with a full event buffer
@@ -337,19 +358,27 @@ def simulate_fast(
     check: bool = False,
     threads: int | None = None,
     adopt: bool = False,
+    cache_capacity: int | None = None,
 ) -> tuple[WorldState, EventRecorder, np.ndarray, TrajectoryRecorder | None]:
     """Run the seeded batch ``state`` with the compiled kernel on ``threads`` threads.
 
     Returns the final state, the events, the breakdowns per run and, with
     ``record``, the trajectories recorded tick by tick (as ``run_batch``).
     ``adopt``: step ``state``'s own arrays instead of a copy (the caller
-    gives it up; large swarms need the memory).
+    gives it up; large swarms need the memory). ``cache_capacity``: entries
+    of a sparse tag cache (``_tag_cache``; default ``cache_capacity_for``);
+    raises ``TagCacheFull`` if that is too few (start again with more).
     """
     seed = check_seed(seed)
     start = state.tick
     end = params.run_ticks if ticks is None else start + ticks
     batch = _Batch(
-        state, params, seed, default_threads() if threads is None else threads, adopt=adopt
+        state,
+        params,
+        seed,
+        default_threads() if threads is None else threads,
+        adopt=adopt,
+        cache_capacity=cache_capacity_for(params) if cache_capacity is None else cache_capacity,
     )
     trajectories = TrajectoryRecorder(state, end - start) if record else None
     write_ticks = sorted({w.tick for w in params.scenario.reprioritisations})

@@ -17,6 +17,7 @@ from swarmtag.sim.fast._geometry import segment_crosses_box, segment_near_point
 from swarmtag.sim.fast._grid import fill, near
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._tag_cache import hear, known_status
 
 __all__ = ["sense_robots", "tags_advertising"]
 
@@ -86,14 +87,16 @@ def _hidden_by_carriers(r: int, n: int, c: int, w: World, k: Constants, x: Scrat
     """
     sx = w.robot_pos[r, n, 0]
     sy = w.robot_pos[r, n, 1]
-    last = x.blocker[r, n, c]
+    memo = not k.sparse_cache  # sparse caches keep no robot-carrier memo
+    last = x.blocker[r, n, c] if memo else -1
     if last >= 0 and _blocks(r, c, last, sx, sy, w, k):
         return True
     if not k.obstacle_grid:
         for j in range(x.obstacle_count[r]):
             other = x.obstacles[r, j]
             if other != last and _blocks(r, c, other, sx, sy, w, k):
-                x.blocker[r, n, c] = other
+                if memo:
+                    x.blocker[r, n, c] = other
                 return True
         return False
     ex = w.carrier_pos[r, c, 0]
@@ -114,7 +117,8 @@ def _hidden_by_carriers(r: int, n: int, c: int, w: World, k: Constants, x: Scrat
     for j in range(count):
         other = x.obstacles[r, x.near_blockers[r, j]]
         if other != last and _blocks(r, c, other, sx, sy, w, k):
-            x.blocker[r, n, c] = other
+            if memo:
+                x.blocker[r, n, c] = other
             return True
     return False
 
@@ -178,6 +182,9 @@ def _camera(
     """Carrier ``c``, in range of robot ``n``'s camera (memory 0): a sighting if in view."""
     if k.occlusion > 0 and not _line_of_sight(r, n, c, w, k, x):
         return
+    if k.sparse_cache:  # no sighting memory, no noise: only the distance is needed
+        _remember(r, n, c, math.sqrt(ox * ox + oy * oy), x)
+        return
     if k.detection_noise > 0:
         w.seen_pos[r, n, c, 0] = w.carrier_pos[r, c, 0] + x.noise[r, n, c, 0]
         w.seen_pos[r, n, c, 1] = w.carrier_pos[r, c, 1] + x.noise[r, n, c, 1]
@@ -218,9 +225,7 @@ def _hear(r: int, n: int, t: int, slot: int, w: World, k: Constants, x: Scratch)
             continue
         if k.advertisement_loss > 0 and x.radio_draw[r, n, c] < k.advertisement_loss:
             continue
-        w.known_status[r, n, c] = w.adv_status[r, slot, c]
-        w.known_urgency[r, n, c] = w.adv_urgency[r, slot, c]
-        w.heard_tick[r, n, c] = t
+        hear(r, n, c, t, w.adv_status[r, slot, c], w.adv_urgency[r, slot, c], w, k, x)
 
 
 @inlined
@@ -277,7 +282,7 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
             )
         for j in range(count):
             c = x.obstacles[r, x.near_carriers[r, j] if k.obstacle_grid else j]
-            if w.known_status[r, n, c] != _AWAITING:
+            if known_status(r, n, c, w, k) != _AWAITING:
                 continue
             ox = w.carrier_pos[r, c, 0] - rx
             oy = w.carrier_pos[r, c, 1] - ry
@@ -319,9 +324,7 @@ def _sense_every_pair(r: int, t: int, lo: int, hi: int, w: World, k: Constants, 
             if lossy and x.radio_draw[r, n, c] < k.advertisement_loss:
                 heard = False
             if heard:
-                w.known_status[r, n, c] = w.adv_status[r, slot, c]
-                w.known_urgency[r, n, c] = w.adv_urgency[r, slot, c]
-                w.heard_tick[r, n, c] = t
+                hear(r, n, c, t, w.adv_status[r, slot, c], w.adv_urgency[r, slot, c], w, k, x)
             if k.split and k.occlusion > 0 and visible:
                 visible = _line_of_sight(r, n, c, w, k, x)
             if visible:

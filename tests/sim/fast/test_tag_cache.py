@@ -1,0 +1,116 @@
+"""Sparse tag caches (``sim/fast/_tag_cache.py``): warehouses give the reference's bytes.
+
+A robot's list drops what cannot change its behaviour; these tests make the
+lists small enough to purge and to overflow, and compare with the reference.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from swarmtag.policy import Urgency
+from swarmtag.sim import Camera, Radio, Realism, Reprioritisation, Scenario, load_profile, simulate
+from swarmtag.sim import fast as fast_backend
+from swarmtag.sim.fast import TagCacheFull, _layout, simulate_fast
+from swarmtag.sim.params import make_params
+from swarmtag.sim.runner import _result, seeded_state
+from tests.sim.fast.helpers import assert_same
+
+POLICY = Urgency(alpha=0.7)
+
+
+def _hall(ticks: int = 1800, interval: float = 3.0, **realism: float) -> Scenario:
+    part = {"map": "warehouse-hall", "order_interval": interval, "initial_orders": 20}
+    scenario = load_profile("lab").scenario({"robots": 30, "ticks": ticks, "warehouse": part})
+    return replace(scenario, realism=Realism(**realism)) if realism else scenario
+
+
+def test_runs_without_memory_or_per_pair_draws_keep_sparse_caches():
+    sparse = make_params(_hall(), POLICY)
+    assert sparse.sparse_tag_cache
+    assert not make_params(_hall(advertisement_loss=0.1), POLICY).sparse_tag_cache
+    assert not make_params(_hall(detection_noise=0.01), POLICY).sparse_tag_cache
+    lab = replace(Scenario.default(3, 7), ticks=10)
+    assert make_params(lab, POLICY).sparse_tag_cache
+    assert not make_params(replace(lab, perception="disc"), POLICY).sparse_tag_cache
+    assert not make_params(replace(lab, camera=Camera(memory=1.0)), POLICY).sparse_tag_cache
+    result = simulate(_hall(), POLICY, seed=1, runs=1, backend="fast")
+    assert result.final_state.known_status.shape == (1, 30, 0)
+    assert simulate(
+        lab, POLICY, seed=1, runs=1, backend="reference"
+    ).final_state.known_status.shape == (1, 3, 7)
+    assert _layout.cache_capacity_for(sparse) == len(sparse.floor.pickup_slots) + 2 == 44
+    assert _layout.cache_capacity_for(make_params(lab, POLICY)) == 7 + 2
+    big = make_params(replace(Scenario.default(120, 128), ticks=10), POLICY)
+    assert _layout.cache_capacity_for(big) == 64
+
+
+LAB = replace(
+    Scenario.default(40, 60),
+    ticks=1500,
+    radio=Radio(range=1.5, interval=0.3),
+    realism=Realism(status_delay=2, speed_variation=0.2, breakdown=0.0003),
+    reprioritisations=(Reprioritisation(tick=300, carrier=3, urgency=9),),
+)
+"""A lab run with a short radio, operator writes and breakdowns (a list fills and purges)."""
+
+
+@pytest.mark.parametrize(
+    ("scenario", "bound"),
+    [(_hall(3000, 20.0, status_delay=2, speed_variation=0.2), 44), (LAB, 62)],
+    ids=["warehouse", "lab"],
+)
+def test_every_capacity_overflows_or_gives_the_reference_bytes(scenario, bound):
+    params = make_params(scenario, POLICY)
+    assert _layout.cache_bound(params) == bound
+    reference = simulate(scenario, POLICY, seed=11, runs=2, backend="reference")
+    assert reference.delivered.sum() > 0
+    outcomes = {}
+    for capacity in (1, 2, 4, 8, 12, 16, bound):
+        state = seeded_state(params, seed=11, runs=2, backend="fast")
+        try:
+            final, events, breakdowns, _ = simulate_fast(
+                state, params, seed=11, cache_capacity=capacity
+            )
+        except TagCacheFull as full:
+            outcomes[capacity] = f"full, next {full.capacity}"
+            continue
+        result = _result(
+            final, params, seed=11, events=events, breakdowns=breakdowns, recorder=None
+        )
+        assert_same(reference, result)
+        outcomes[capacity] = "same"
+    # small lists overflow, and a list smaller than the bound held (it purged) and agreed
+    assert outcomes[1] == "full, next 2"
+    assert outcomes[bound] == "same"
+    assert any(outcomes[c] == "same" for c in (2, 4, 8, 12, 16)), outcomes
+
+
+def test_a_batch_whose_caches_overflow_starts_again_with_the_same_bytes(monkeypatch):
+    monkeypatch.setattr(_layout, "FIRST_CACHE_CAPACITY", 1)
+    capacities: list[object] = []
+    original = fast_backend.simulate_fast
+
+    def counted(*args: object, **options: object):  # type: ignore[no-untyped-def]
+        capacities.append(options["cache_capacity"])
+        return original(*args, **options)
+
+    monkeypatch.setattr(fast_backend, "simulate_fast", counted)
+    scenario = _hall()
+    reference = simulate(scenario, POLICY, seed=3, runs=2, backend="reference")
+    result = simulate(scenario, POLICY, seed=3, runs=2, backend="fast")
+    assert_same(reference, result)
+    assert capacities[:2] == [None, 2], capacities
+    assert len(capacities) >= 3
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_sparse_caches_split_over_threads_agree(threads, monkeypatch):
+    monkeypatch.setattr(fast_backend._runner, "SPLIT_FROM", 10)
+    scenario = _hall()
+    reference = simulate(scenario, POLICY, seed=5, runs=1, backend="reference")
+    assert_same(
+        reference, simulate(scenario, POLICY, seed=5, runs=1, backend="fast", threads=threads)
+    )
