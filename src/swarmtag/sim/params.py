@@ -112,25 +112,30 @@ class Params:
 
 FIRST_CACHE_CAPACITY: Final = 64
 """Entries of each robot's sparse tag cache the compiled kernel tries first."""
+SPARSE_FROM_PAIRS: Final = 65_536
+"""Robot-carrier pairs of a run from which its tag caches are lists (below, the dense arrays
+are small and their lookups faster: 20 robots and 40 carriers ran 25 % slower as lists,
+the warehouse hall 30 %; docs/performance.md)."""
 
 
 def sparse_tag_cache(scenario: Scenario) -> bool:
     """Whether the compiled kernel keeps ``scenario``'s robots' tag caches as short lists.
 
-    With split perception and neither sighting memory nor the per-pair
-    radio or camera draws of advertisement loss and camera noise
-    (``sim/fast/_tag_cache.py``): a dense cache per robot and carrier grows
-    with robots times carriers (in a warehouse, times orders), and the lists
-    give the same event logs. The compiled backend's states then carry no
-    dense caches.
+    Where the lists are exact (split perception with neither sighting memory
+    nor the per-pair draws of advertisement loss and camera noise,
+    ``sim/fast/_tag_cache.py``) and pay: from ``SPARSE_FROM_PAIRS``
+    robot-carrier pairs a run (a warehouse's carriers are its orders, so its
+    dense caches grow with the run). The compiled backend's states then
+    carry no dense caches.
     """
     realism = scenario.realism
-    return (
+    exact = (
         scenario.perception == "split"
         and scenario.camera.memory == 0
         and realism.advertisement_loss == 0
         and realism.detection_noise == 0
     )
+    return exact and scenario.robots * scenario.carriers >= SPARSE_FROM_PAIRS
 
 
 def make_params(scenario: Scenario, policy: Policy) -> Params:

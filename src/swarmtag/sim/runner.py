@@ -312,8 +312,6 @@ def batch_memory(
         realism = scenario.realism
         if sparse_tag_cache(scenario):
             entries = FIRST_CACHE_CAPACITY if cache_capacity is None else cache_capacity
-            if scenario.warehouse is None:
-                entries = min(entries, carriers + 2)
             caches = 34.0 * robots * entries
         else:
             pair = 66.0 + (48.0 if realism.advertisement_loss or realism.detection_noise else 0.0)

@@ -96,7 +96,12 @@ class WorldState:
     goal: Float
     """(R, N, 2) transport goal in the drop-off area."""
     blocked_until: Int
-    """(R, N, C) first tick at which the robot may select the carrier again (cool-down)."""
+    """(R, N, C) first tick at which the robot may select the carrier again (cool-down).
+
+    This and the other (R, N, C) arrays below have no carriers on their last
+    axis in the compiled backend's states where it keeps its robots' tag
+    caches as lists (``params.sparse_tag_cache``).
+    """
     known_status: NDArray[np.int8]
     """(R, N, C) status last heard from each tag; -1 never heard."""
     known_urgency: NDArray[np.int8]

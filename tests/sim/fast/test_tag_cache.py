@@ -10,13 +10,15 @@ from dataclasses import replace
 
 import pytest
 
-from swarmtag.policy import Urgency
+from swarmtag.policy import Proximity, Urgency
 from swarmtag.sim import Camera, Radio, Realism, Reprioritisation, Scenario, load_profile, simulate
 from swarmtag.sim import fast as fast_backend
+from swarmtag.sim import params as params_module
 from swarmtag.sim.fast import TagCacheFull, _layout, simulate_fast
 from swarmtag.sim.params import make_params
 from swarmtag.sim.runner import _result, seeded_state
-from tests.sim.fast.helpers import assert_same
+from tests.sim.fast.helpers import assert_same, compare
+from tests.sim.fast.test_equivalence import CASES
 
 POLICY = Urgency(alpha=0.7)
 
@@ -27,24 +29,45 @@ def _hall(ticks: int = 1800, interval: float = 3.0, **realism: float) -> Scenari
     return replace(scenario, realism=Realism(**realism)) if realism else scenario
 
 
+THRESHOLD = params_module.SPARSE_FROM_PAIRS
+
+
+@pytest.fixture(autouse=True)
+def _lists_in_small_runs_too(monkeypatch):
+    """Every run here whose lists are exact keeps lists, however few its pairs."""
+    monkeypatch.setattr(params_module, "SPARSE_FROM_PAIRS", 0)
+
+
+def test_lists_are_kept_where_exact_and_large(monkeypatch):
+    monkeypatch.setattr(params_module, "SPARSE_FROM_PAIRS", THRESHOLD)
+    lab = replace(Scenario.default(300, 256), ticks=10)  # 76,800 pairs: lists pay
+    assert make_params(lab, POLICY).sparse_tag_cache
+    assert not make_params(replace(lab, perception="disc"), POLICY).sparse_tag_cache
+    assert not make_params(replace(lab, camera=Camera(memory=1.0)), POLICY).sparse_tag_cache
+    realism = Realism(advertisement_loss=0.1)
+    assert not make_params(replace(lab, realism=realism), POLICY).sparse_tag_cache
+    assert not make_params(replace(lab, robots=255), POLICY).sparse_tag_cache  # 65,280 pairs
+    assert make_params(replace(lab, robots=256), POLICY).sparse_tag_cache  # 65,536
+    assert not make_params(_hall(), POLICY).sparse_tag_cache  # a small warehouse
+
+
 def test_runs_without_memory_or_per_pair_draws_keep_sparse_caches():
     sparse = make_params(_hall(), POLICY)
     assert sparse.sparse_tag_cache
     assert not make_params(_hall(advertisement_loss=0.1), POLICY).sparse_tag_cache
     assert not make_params(_hall(detection_noise=0.01), POLICY).sparse_tag_cache
-    lab = replace(Scenario.default(3, 7), ticks=10)
-    assert make_params(lab, POLICY).sparse_tag_cache
-    assert not make_params(replace(lab, perception="disc"), POLICY).sparse_tag_cache
-    assert not make_params(replace(lab, camera=Camera(memory=1.0)), POLICY).sparse_tag_cache
+    lab = replace(Scenario.default(300, 256), ticks=10)
+    small = replace(Scenario.default(3, 7), ticks=10)
     result = simulate(_hall(), POLICY, seed=1, runs=1, backend="fast")
     assert result.final_state.known_status.shape == (1, 30, 0)
     assert simulate(
-        lab, POLICY, seed=1, runs=1, backend="reference"
-    ).final_state.known_status.shape == (1, 3, 7)
+        _hall(), POLICY, seed=1, runs=1, backend="reference"
+    ).final_state.known_status.shape[:2] == (1, 30)
     assert _layout.cache_capacity_for(sparse) == len(sparse.floor.pickup_slots) + 2 == 44
-    assert _layout.cache_capacity_for(make_params(lab, POLICY)) == 7 + 2
-    big = make_params(replace(Scenario.default(120, 128), ticks=10), POLICY)
-    assert _layout.cache_capacity_for(big) == 64
+    assert _layout.cache_capacity_for(make_params(lab, POLICY)) == 64
+    assert _layout.cache_capacity_for(make_params(small, POLICY)) == 7 + 2
+    disc = make_params(replace(small, perception="disc"), POLICY)
+    assert _layout.cache_capacity_for(disc) == 0
 
 
 LAB = replace(
@@ -64,6 +87,7 @@ LAB = replace(
 )
 def test_every_capacity_overflows_or_gives_the_reference_bytes(scenario, bound):
     params = make_params(scenario, POLICY)
+    assert params.sparse_tag_cache
     assert _layout.cache_bound(params) == bound
     reference = simulate(scenario, POLICY, seed=11, runs=2, backend="reference")
     assert reference.delivered.sum() > 0
@@ -114,3 +138,28 @@ def test_sparse_caches_split_over_threads_agree(threads, monkeypatch):
     assert_same(
         reference, simulate(scenario, POLICY, seed=5, runs=1, backend="fast", threads=threads)
     )
+
+
+LIST_CASES = [
+    "paper-sim",
+    "paper-sim-5x10",
+    "lab-static",
+    "robots-occlude",
+    "no-occlusion-short-camera",
+    "slow-radio",
+    "turning-walk",
+    "reprioritised",
+    "quick-handling",
+    "crowded-20x40",
+]
+"""``test_equivalence.CASES`` whose lists are exact (no memory, loss or noise)."""
+
+
+@pytest.mark.parametrize("policy", [Proximity(), Urgency(alpha=9.0)], ids=lambda p: p.name)
+@pytest.mark.parametrize("case", LIST_CASES)
+def test_lab_runs_with_lists_agree(case, policy):
+    scenario = CASES[case]
+    assert make_params(scenario, policy).sparse_tag_cache
+    fast = compare(scenario, policy, seed=11, runs=4, run_offset=3)
+    assert fast.final_state.known_status.shape[2] == 0
+    assert (fast.events.kind == "select").sum() > 0
