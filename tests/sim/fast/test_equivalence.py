@@ -189,8 +189,21 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         replace(LARGE, realism=Realism(advertisement_loss=0.2, detection_noise=0.02)),
         replace(LARGE, radio=Radio(range=0.8, interval=0.3)),  # the radio grid leaves tags out
         warehouse(120, 200, map="warehouse-hall", order_interval=0.5, initial_orders=40),
+        replace(
+            warehouse(120, 200, map="warehouse-hall", order_interval=0.5, initial_orders=40),
+            radio=Radio(range=3.0, interval=0.3),  # the radio grid across shelves
+        ),
     ],
-    ids=["grids", "robots-occlude", "memory", "disc", "realism", "short-radio", "warehouse"],
+    ids=[
+        "grids",
+        "robots-occlude",
+        "memory",
+        "disc",
+        "realism",
+        "short-radio",
+        "warehouse",
+        "warehouse-short-radio",
+    ],
 )
 def test_large_swarms_agree(scenario):
     compare(scenario, Urgency(alpha=3.0), seed=21, runs=2)
