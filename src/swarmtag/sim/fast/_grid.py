@@ -22,11 +22,12 @@ import math
 
 import numpy as np
 
-from swarmtag.sim.fast._jit import inlined
+from swarmtag.sim.fast._jit import inlined, jit
 
 __all__ = ["fill", "near", "table_bits"]
 
 
+@jit
 def table_bits(bodies: int) -> int:
     """``bits`` of a table for ``bodies`` points: ``4**bits >= 2 * bodies``, at least 2."""
     bits = 2

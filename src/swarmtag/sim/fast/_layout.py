@@ -262,6 +262,20 @@ class Scratch(NamedTuple):
     """(R, buckets + 1) the robots' coarse grid at the tick's start (robots hide carriers)."""
     crowd_items: I8
     """(R, N) the robots' coarse grid: robot ids, bucket by bucket."""
+    grid_epoch: I8
+    """(R,) counts the builds of the robots' grid for the collision passes (``_motion``)."""
+    moved_epoch: I8
+    """(R, N) the build since which each robot moved (it is displaced while that is current)."""
+    displaced: I8
+    """(R, N) the robots that moved since the grid was built, ``displaced_count`` of them."""
+    displaced_count: I8
+    displaced_x: F8
+    """(R, N) where the displaced robots are, in ``displaced`` order (the patch grid)."""
+    displaced_y: F8
+    patch_start: I8
+    """(R, buckets + 1) the displaced robots' grid (``patch_bits``): later collision passes."""
+    patch_items: I8
+    patch_bits: I8
     radio_x: F8
     """(R, C) the advertising tags' x, in ``advertising`` order (radio grid)."""
     radio_y: F8
@@ -538,6 +552,15 @@ def scratch_for(runs: int, k: Constants, capacity: int) -> Scratch:
         sight_items=np.zeros(c, dtype=np.int64),
         crowd_start=np.zeros((runs, robot_buckets), dtype=np.int64),
         crowd_items=np.zeros(n, dtype=np.int64),
+        grid_epoch=np.zeros(runs, dtype=np.int64),
+        moved_epoch=np.zeros(n, dtype=np.int64),
+        displaced=np.zeros(n, dtype=np.int64),
+        displaced_count=np.zeros(runs, dtype=np.int64),
+        displaced_x=floats(*n),
+        displaced_y=floats(*n),
+        patch_start=np.zeros((runs, robot_buckets), dtype=np.int64),
+        patch_items=np.zeros(n, dtype=np.int64),
+        patch_bits=np.zeros(runs, dtype=np.int64),
         radio_x=floats(*c),
         radio_y=floats(*c),
         radio_start=np.zeros((runs, carrier_buckets), dtype=np.int64),
