@@ -130,14 +130,20 @@ def test_a_batch_whose_caches_overflow_starts_again_with_the_same_bytes(monkeypa
     assert len(capacities) >= 3
 
 
-@pytest.mark.parametrize("threads", [1, 2])
-def test_sparse_caches_split_over_threads_agree(threads, monkeypatch):
+def test_sparse_caches_split_over_threads_agree(monkeypatch):
     monkeypatch.setattr(fast_backend._runner, "SPLIT_FROM", 10)
+    batch = fast_backend._runner._Batch
+    original, split = batch._split_run, []
+
+    def counted(self, *arguments):  # type: ignore[no-untyped-def]
+        split.append(arguments[0])
+        return original(self, *arguments)
+
+    monkeypatch.setattr(batch, "_split_run", counted)
     scenario = _hall()
     reference = simulate(scenario, POLICY, seed=5, runs=1, backend="reference")
-    assert_same(
-        reference, simulate(scenario, POLICY, seed=5, runs=1, backend="fast", threads=threads)
-    )
+    assert_same(reference, simulate(scenario, POLICY, seed=5, runs=1, backend="fast", threads=2))
+    assert split, "the run did not take the split path"
 
 
 LIST_CASES = [
