@@ -15,8 +15,9 @@ for the fast (numba) backend on 1 and 2 threads; the same process, the same runs
 Memory per robot is the resident-set growth of the fast run divided by the robots. The
 log-log slope of the cost per robot-tick against the robot count over the single-run
 cases says how the cost grows (1.0: linear). Cases that do not fit in memory are
-skipped with the estimate. The first call compiles the kernel (cached afterwards): it is
-timed separately.
+skipped with the estimate. The first calls compile the kernel (cached afterwards) or load
+its machine code, the batched path's and the split path's (about 0.3 s each process): they
+are timed separately.
 """
 
 from __future__ import annotations
@@ -34,6 +35,8 @@ from swarmtag.sim import Scenario, load_profile, simulate
 
 DENSITY = 0.05
 """Robots per square metre of arena in the single-run cases."""
+SPLIT_FROM = 10_000
+"""Robots from which one run is split over threads (``sim/fast/_runner.py``)."""
 
 
 @dataclass(frozen=True)
@@ -107,7 +110,10 @@ def main() -> None:
 
     start = time.perf_counter()
     simulate(Scenario.default(3, 7), Urgency(alpha=0.7), seed=0, runs=1, backend="fast")
-    print(f"first fast call (compiles or loads the kernel): {time.perf_counter() - start:.1f} s")
+    if max(args.threads) > 1:  # one run split over threads: its own kernel calls
+        warm = Case("warm", SPLIT_FROM, 256, 1, 2).scenario()
+        simulate(warm, Urgency(alpha=0.7), seed=0, runs=1, backend="fast", threads=2)
+    print(f"first fast calls (compile or load the kernels): {time.perf_counter() - start:.1f} s")
     print(
         f"{'case':>6} {'robots':>9} {'runs':>5} {'ticks':>6} {'backend':>10} {'threads':>7} "
         f"{'seconds':>8} {'robot-ticks/s':>14} {'B/robot':>8}"

@@ -11,7 +11,16 @@ import swarmtag.sim.fast._runner as fast_runner
 import swarmtag.sim.runner as sim_runner
 from swarmtag.errors import ConfigError
 from swarmtag.policy import Proximity, Urgency
-from swarmtag.sim import Realism, Scenario, WorldState, load_profile, make_params, run_csv, simulate
+from swarmtag.sim import (
+    Realism,
+    Reprioritisation,
+    Scenario,
+    WorldState,
+    load_profile,
+    make_params,
+    run_csv,
+    simulate,
+)
 from swarmtag.sim.docking import STUCK_PROGRESS
 from swarmtag.sim.fast import _docking, _scene
 from swarmtag.sim.fast._layout import _KERNEL_ONLY, EVENT_SLOTS, World, constants_of
@@ -187,6 +196,49 @@ def test_one_run_split_over_threads_gives_the_same_bytes(scenario, runs, monkeyp
     assert_same(whole, split)
     assert splits, "the run did not take the split path"
     assert whole.delivered.sum() + (whole.events.kind == "select").sum() > 0
+
+
+def test_robots_copied_to_their_grid_slots_on_every_thread_give_the_same_bytes(monkeypatch):
+    # from COPY_APART_FROM robots the threads copy the robots to the grid's slots at once
+    scenario = _wide(150, 40, 300)
+    whole = simulate(scenario, Urgency(alpha=0.7), seed=5, runs=1, backend="fast", threads=1)
+    splits = _count_splits(monkeypatch)
+    monkeypatch.setattr(fast_runner, "COPY_APART_FROM", 1)
+    copies: list[tuple[int, int]] = []
+    original = fast_runner.split_copy
+
+    def counted(r: int, lo: int, hi: int, x: object) -> None:
+        copies.append((lo, hi))
+        original(r, lo, hi, x)
+
+    monkeypatch.setattr(fast_runner, "split_copy", counted)
+    split = simulate(scenario, Urgency(alpha=0.7), seed=5, runs=1, backend="fast", threads=2)
+    assert_same(whole, split)
+    assert splits
+    assert (0, 75) in copies
+    assert (75, 150) in copies
+
+
+def test_a_split_run_paused_every_tick_draws_each_ticks_numbers_once(monkeypatch):
+    # the next tick's numbers are drawn ahead (_split_run): pauses for trajectories and
+    # operator writes must neither draw them again nor skip them
+    writes = (
+        Reprioritisation(tick=40, carrier=2, urgency=9),
+        Reprioritisation(tick=41, carrier=3, urgency=0),
+    )
+    scenario = replace(_wide(150, 40, 120), reprioritisations=writes)
+    whole = simulate(
+        scenario, Urgency(alpha=0.7), seed=6, runs=1, backend="fast", threads=1, record=True
+    )
+    splits = _count_splits(monkeypatch)
+    split = simulate(
+        scenario, Urgency(alpha=0.7), seed=6, runs=1, backend="fast", threads=2, record=True
+    )
+    assert_same(whole, split)
+    assert len(splits) >= 120  # one call a tick
+    assert whole.trajectories is not None
+    assert split.trajectories is not None
+    np.testing.assert_array_equal(whole.trajectories.robot_pos, split.trajectories.robot_pos)
 
 
 def test_a_warehouse_run_split_over_threads_gives_the_same_bytes(monkeypatch):

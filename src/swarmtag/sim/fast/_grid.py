@@ -24,7 +24,7 @@ import numpy as np
 
 from swarmtag.sim.fast._jit import inlined, jit
 
-__all__ = ["fill", "near", "table_bits"]
+__all__ = ["fill", "near", "near_within", "table_bits"]
 
 
 @jit
@@ -57,7 +57,8 @@ def fill(
 ) -> None:
     """Sort points ``(xs[r, i], ys[r, i])``, ``i < count``, into run ``r``'s ``start``/``items``.
 
-    ``keys[r, :count]`` is working space (each point's bucket).
+    ``keys[r, :count]`` is working space: each point's bucket, then its slot
+    in ``items`` (``keys[r, items[r, slot]] == slot``).
     """
     buckets = 1 << (2 * bits)
     for b in range(buckets + 1):
@@ -73,6 +74,7 @@ def fill(
         b = keys[r, i]
         start[r, b] -= 1
         items[r, start[r, b]] = i
+        keys[r, i] = start[r, b]
 
 
 @inlined
@@ -109,6 +111,44 @@ def near(
                     while position > 0 and out[r, position - 1] > item:
                         out[r, position] = out[r, position - 1]
                         position -= 1
+                out[r, position] = item
+                found += 1
+    return found
+
+
+@inlined
+def near_within(
+    r: int,
+    x: float,
+    y: float,
+    cell: float,
+    bits: int,
+    start: np.ndarray,
+    items: np.ndarray,
+    item_at: np.ndarray,
+    out: np.ndarray,
+) -> int:
+    """``near`` with reach ``cell``, ascending, of the points less than ``cell`` away in x and y.
+
+    ``item_at[r, slot, 0]``, ``item_at[r, slot, 1]`` are where the point
+    ``items[r, slot]`` stood when the grid was built (a copy in bucket order): the test
+    reads memory in the order of the buckets instead of jumping by point id,
+    and the far points of folded cells never reach the sort.
+    """
+    found = 0
+    low_x = math.floor((x - cell) / cell)
+    low_y = math.floor((y - cell) / cell)
+    for gx in range(low_x, math.floor((x + cell) / cell) + 1):
+        for gy in range(low_y, math.floor((y + cell) / cell) + 1):
+            b = _bucket(gx, gy, bits)
+            for slot in range(start[r, b], start[r, b + 1]):
+                if abs(x - item_at[r, slot, 0]) >= cell or abs(y - item_at[r, slot, 1]) >= cell:
+                    continue
+                item = items[r, slot]
+                position = found
+                while position > 0 and out[r, position - 1] > item:  # insertion: short lists
+                    out[r, position] = out[r, position - 1]
+                    position -= 1
                 out[r, position] = item
                 found += 1
     return found

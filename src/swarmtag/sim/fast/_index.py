@@ -17,7 +17,7 @@ from swarmtag.sim.fast._grid import fill
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 
-__all__ = ["grid_robots", "index_obstacles", "index_robots"]
+__all__ = ["copy_to_slots", "grid_robots", "index_obstacles", "index_robots"]
 
 
 @inlined
@@ -69,11 +69,35 @@ def index_obstacles(r: int, w: World, k: Constants, x: Scratch) -> None:
 
 
 @inlined
-def grid_robots(r: int, k: Constants, x: Scratch) -> None:
-    """Sort run ``r``'s robots, at ``x.x``/``x.y``, into the fine robot grid."""
+def grid_robots(r: int, k: Constants, x: Scratch, copy: bool) -> None:
+    """Sort run ``r``'s robots, at ``x.x``/``x.y``, into the fine robot grid.
+
+    ``copy``: and copy them to their slots (``copy_to_slots``), as the
+    collision passes need.
+    """
     fill(
         r, x.x, x.y, k.robots, k.grid_cell, k.robot_bits, x.robot_start, x.robot_items, x.robot_keys
     )
+    if copy:
+        copy_to_slots(r, 0, k.robots, x)
+
+
+@inlined
+def copy_to_slots(r: int, lo: int, hi: int, x: Scratch) -> None:
+    """Robots ``lo .. hi - 1``'s positions and bodies, copied to their slots of the robots' grid.
+
+    The collision passes read them bucket by bucket from there
+    (``robot_item_*``: ``near_within`` and the first pass), in memory order
+    instead of by robot id. Each robot writes only its own slot, so ranges
+    may be copied at once on several threads.
+    """
+    for n in range(lo, hi):
+        slot = x.robot_keys[r, n]
+        x.robot_item_body[r, slot, 0] = x.x[r, n]  # one cache line a robot, mostly
+        x.robot_item_body[r, slot, 1] = x.y[r, n]
+        x.robot_item_body[r, slot, 2] = x.extent[r, n]
+        x.robot_item_body[r, slot, 3] = x.radius[r, n]
+        x.robot_item_movable[r, slot] = x.movable[r, n]
 
 
 @inlined
@@ -85,7 +109,7 @@ def index_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
         x.x[r, n] = w.robot_pos[r, n, 0]
         x.y[r, n] = w.robot_pos[r, n, 1]
     if k.avoid_taken_faces:  # robots standing on predock points
-        grid_robots(r, k, x)
+        grid_robots(r, k, x, False)
     if k.occlusion >= 2:  # robots hiding carriers
         fill(
             r,

@@ -38,6 +38,7 @@ __all__ = [
 
 F8 = NDArray[np.float64]
 I8 = NDArray[np.int64]
+I4 = NDArray[np.int32]
 B1 = NDArray[np.bool_]
 S1 = NDArray[np.int8]
 
@@ -246,19 +247,23 @@ class Scratch(NamedTuple):
     obstacle_box: F8
     """(R, 4) the smallest and largest x, then y, of the obstacles' centres."""
     obstacle_y: F8
-    obstacle_start: I8
+    obstacle_start: I4
     """(R, buckets + 1) the obstacles' grid (``_grid``): where each bucket's list starts."""
     obstacle_items: I8
     """(R, C) the obstacles' grid: positions in ``obstacles``, bucket by bucket."""
-    robot_start: I8
+    robot_start: I4
     """(R, buckets + 1) the robots' grid: at the tick's start, then of each collision pass."""
     robot_items: I8
     """(R, N) the robots' grid: robot ids, bucket by bucket."""
-    sight_start: I8
+    robot_item_body: F8
+    """(R, N, 4) each of ``robot_items`` at the build: x, y, extent, radius (no grid: N = 0)."""
+    robot_item_movable: B1
+    """(R, N) ... and whether it can be pushed."""
+    sight_start: I4
     """(R, buckets + 1) the obstacles' coarse grid (cells as wide as the camera's range)."""
     sight_items: I8
     """(R, C) the obstacles' coarse grid: positions in ``obstacles``, bucket by bucket."""
-    crowd_start: I8
+    crowd_start: I4
     """(R, buckets + 1) the robots' coarse grid at the tick's start (robots hide carriers)."""
     crowd_items: I8
     """(R, N) the robots' coarse grid: robot ids, bucket by bucket."""
@@ -272,14 +277,14 @@ class Scratch(NamedTuple):
     displaced_x: F8
     """(R, N) where the displaced robots are, in ``displaced`` order (the patch grid)."""
     displaced_y: F8
-    patch_start: I8
+    patch_start: I4
     """(R, buckets + 1) the displaced robots' grid (``patch_bits``): later collision passes."""
     patch_items: I8
     patch_bits: I8
     radio_x: F8
     """(R, C) the advertising tags' x, in ``advertising`` order (radio grid)."""
     radio_y: F8
-    radio_start: I8
+    radio_start: I4
     """(R, buckets + 1) the advertising tags' grid (cells as wide as the radio's range)."""
     radio_items: I8
     """(R, C) the advertising tags' grid: positions in ``advertising``, bucket by bucket."""
@@ -544,13 +549,15 @@ def scratch_for(runs: int, k: Constants, capacity: int) -> Scratch:
         obstacle_x=floats(*c),
         obstacle_box=floats(runs, 4),
         obstacle_y=floats(*c),
-        obstacle_start=np.zeros((runs, carrier_buckets), dtype=np.int64),
+        obstacle_start=np.zeros((runs, carrier_buckets), dtype=np.int32),
         obstacle_items=np.zeros(c, dtype=np.int64),
-        robot_start=np.zeros((runs, robot_buckets), dtype=np.int64),
+        robot_start=np.zeros((runs, robot_buckets), dtype=np.int32),
         robot_items=np.zeros(n, dtype=np.int64),
-        sight_start=np.zeros((runs, carrier_buckets), dtype=np.int64),
+        robot_item_body=floats(runs, robots if k.robot_grid else 0, 4),
+        robot_item_movable=np.zeros((runs, robots if k.robot_grid else 0), dtype=bool),
+        sight_start=np.zeros((runs, carrier_buckets), dtype=np.int32),
         sight_items=np.zeros(c, dtype=np.int64),
-        crowd_start=np.zeros((runs, robot_buckets), dtype=np.int64),
+        crowd_start=np.zeros((runs, robot_buckets), dtype=np.int32),
         crowd_items=np.zeros(n, dtype=np.int64),
         grid_epoch=np.zeros(runs, dtype=np.int64),
         moved_epoch=np.zeros(n, dtype=np.int64),
@@ -558,12 +565,12 @@ def scratch_for(runs: int, k: Constants, capacity: int) -> Scratch:
         displaced_count=np.zeros(runs, dtype=np.int64),
         displaced_x=floats(*n),
         displaced_y=floats(*n),
-        patch_start=np.zeros((runs, robot_buckets), dtype=np.int64),
+        patch_start=np.zeros((runs, robot_buckets), dtype=np.int32),
         patch_items=np.zeros(n, dtype=np.int64),
         patch_bits=np.zeros(runs, dtype=np.int64),
         radio_x=floats(*c),
         radio_y=floats(*c),
-        radio_start=np.zeros((runs, carrier_buckets), dtype=np.int64),
+        radio_start=np.zeros((runs, carrier_buckets), dtype=np.int32),
         radio_items=np.zeros(c, dtype=np.int64),
         robot_keys=np.zeros(n, dtype=np.int64),
         carrier_keys=np.zeros(c, dtype=np.int64),

@@ -27,7 +27,7 @@ from swarmtag.sim.fast._geometry import (
     step_towards,
     turn_towards,
 )
-from swarmtag.sim.fast._grid import fill, near, table_bits
+from swarmtag.sim.fast._grid import fill, near, near_within, table_bits
 from swarmtag.sim.fast._index import grid_robots
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
@@ -130,14 +130,21 @@ def _beyond_obstacles(r: int, xn: float, yn: float, reach: float, x: Scratch) ->
 
 @inlined
 def _robot_sums(
-    r: int, n: int, xn: float, yn: float, ids: np.ndarray, count: int, listed: bool, x: Scratch
+    r: int,
+    n: int,
+    xn: float,
+    yn: float,
+    extent: float,
+    radius: float,
+    ids: np.ndarray,
+    count: int,
+    listed: bool,
+    x: Scratch,
 ) -> tuple[float, float]:
-    """The summed pushes of other robots on movable robot ``n``.
+    """The summed pushes of other robots on movable robot ``n`` (at ``xn, yn``, its body).
 
     The robots are ``ids[r, :count]`` (ascending) when ``listed``, else ``0 .. count - 1``.
     """
-    extent = x.extent[r, n]
-    radius = x.radius[r, n]
     total_x = 0.0
     total_y = 0.0
     for j in range(count):
@@ -163,6 +170,8 @@ def _obstacle_sums(
     n: int,
     xn: float,
     yn: float,
+    body_extent: float,
+    radius: float,
     ids: np.ndarray,
     count: int,
     listed: bool,
@@ -170,12 +179,11 @@ def _obstacle_sums(
     k: Constants,
     x: Scratch,
 ) -> tuple[float, float]:
-    """The summed pushes of obstacle carriers on movable robot ``n``.
+    """The summed pushes of obstacle carriers on movable robot ``n`` (at ``xn, yn``, its body).
 
     The obstacles are ``ids[r, :count]`` (ascending) when ``listed``, else ``0 .. count - 1``.
     """
-    extent = x.extent[r, n] + k.carrier_half
-    radius = x.radius[r, n]
+    extent = body_extent + k.carrier_half
     reach = extent + radius
     ghost = w.ghost[r, n]
     total_x = 0.0
@@ -235,44 +243,53 @@ def _patched_neighbours(r: int, xn: float, yn: float, found: int, k: Constants, 
 
 
 @inlined
-def collide_range(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
-    """A Jacobi pass's new positions (``x.new_x``, ``x.new_y``) of ``x.active[r, lo:hi]``.
+def collide_range(
+    r: int, lo: int, hi: int, first: bool, w: World, k: Constants, x: Scratch
+) -> None:
+    """A Jacobi pass's new positions of ``x.active[r, lo:hi]`` (``x.new_x[r, lo:hi]``, ``new_y``).
 
     Reads the positions at the pass's start (``x.x``, ``x.y``) only, so
     ranges of robots may be computed at once on several threads (each with
-    its own ``x.gathered``).
+    its own ``x.gathered``). In the ``first`` pass of a tick with the robots'
+    grid, ``active`` lists the robots bucket by bucket, and each reads its
+    position from the grid's copy in that order instead of by robot id.
     """
     half = k.carrier_half
     cell = k.grid_cell
     for j in range(lo, hi):
         n = x.active[r, j] if k.robot_grid else j
-        xn = x.x[r, n]
-        yn = x.y[r, n]
-        extent = x.extent[r, n]
-        radius = x.radius[r, n]
+        in_slots = first and k.robot_grid  # the same numbers, read in memory order
+        xn = x.robot_item_body[r, j, 0] if in_slots else x.x[r, n]
+        yn = x.robot_item_body[r, j, 1] if in_slots else x.y[r, n]
+        extent = x.robot_item_body[r, j, 2] if in_slots else x.extent[r, n]
+        radius = x.robot_item_body[r, j, 3] if in_slots else x.radius[r, n]
+        movable = x.robot_item_movable[r, j] if in_slots else x.movable[r, n]
         robot_x = 0.0
         robot_y = 0.0
         carrier_x = 0.0
         carrier_y = 0.0
-        if x.movable[r, n]:
+        if movable:
             if k.robot_grid:
-                found = near(
+                found = near_within(
                     r,
                     xn,
                     yn,
                     cell,
-                    cell,
                     k.robot_bits,
                     x.robot_start,
                     x.robot_items,
+                    x.robot_item_body,
                     x.gathered,
-                    True,
                 )
                 if x.displaced_count[r] > 0:  # a later pass: robots moved since the build
                     found = _patched_neighbours(r, xn, yn, found, k, x)
-                robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, found, True, x)
+                robot_x, robot_y = _robot_sums(
+                    r, n, xn, yn, extent, radius, x.gathered, found, True, x
+                )
             else:
-                robot_x, robot_y = _robot_sums(r, n, xn, yn, x.gathered, k.robots, False, x)
+                robot_x, robot_y = _robot_sums(
+                    r, n, xn, yn, extent, radius, x.gathered, k.robots, False, x
+                )
             reach = (extent + half) + radius
             if _beyond_obstacles(r, xn, yn, reach, x):
                 pass
@@ -290,11 +307,12 @@ def collide_range(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) 
                     True,
                 )
                 carrier_x, carrier_y = _obstacle_sums(
-                    r, n, xn, yn, x.gathered, found, True, w, k, x
+                    r, n, xn, yn, extent, radius, x.gathered, found, True, w, k, x
                 )
             else:
+                count = x.obstacle_count[r]
                 carrier_x, carrier_y = _obstacle_sums(
-                    r, n, xn, yn, x.gathered, x.obstacle_count[r], False, w, k, x
+                    r, n, xn, yn, extent, radius, x.gathered, count, False, w, k, x
                 )
         margin = extent + radius
         new_x = minimum(maximum((xn + robot_x) + carrier_x, margin), k.arena - margin)
@@ -302,13 +320,15 @@ def collide_range(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) 
         if k.has_floor:
             row, col = cell_of(x.before_pos[r, n, 0], x.before_pos[r, n, 1], k)
             new_x, new_y = keep_off_shelves(new_x, new_y, extent, radius, row, col, k)
-        x.new_x[r, n] = new_x
-        x.new_y[r, n] = new_y
+        x.new_x[r, j] = new_x  # by place in the list: threads write apart
+        x.new_y[r, j] = new_y
 
 
 @inlined
-def _pass_update(r: int, count: int, k: Constants, x: Scratch) -> int:
+def _pass_update(r: int, count: int, first: bool, k: Constants, x: Scratch) -> int:
     """Move the robots ``x.active[r, :count]`` to their new positions; list the movers.
+
+    (``first``: as in ``collide_range``.)
 
     Lists those that moved (and where they stood) in ``x.movers``; returns how many did.
     """
@@ -316,13 +336,16 @@ def _pass_update(r: int, count: int, k: Constants, x: Scratch) -> int:
     epoch = x.grid_epoch[r]
     for j in range(count):  # Jacobi: every new position from the pass's start
         n = x.active[r, j] if k.robot_grid else j
-        if x.new_x[r, n] != x.x[r, n] or x.new_y[r, n] != x.y[r, n]:
+        in_slots = first and k.robot_grid
+        old_x = x.robot_item_body[r, j, 0] if in_slots else x.x[r, n]
+        old_y = x.robot_item_body[r, j, 1] if in_slots else x.y[r, n]
+        if x.new_x[r, j] != old_x or x.new_y[r, j] != old_y:
             x.movers[r, movers] = n
-            x.mover_x[r, movers] = x.x[r, n]
-            x.mover_y[r, movers] = x.y[r, n]
+            x.mover_x[r, movers] = old_x
+            x.mover_y[r, movers] = old_y
             movers += 1
-            x.x[r, n] = x.new_x[r, n]
-            x.y[r, n] = x.new_y[r, n]
+            x.x[r, n] = x.new_x[r, j]
+            x.y[r, n] = x.new_y[r, j]
             if k.robot_grid and x.moved_epoch[r, n] != epoch:  # now away from its grid cell
                 x.moved_epoch[r, n] = epoch
                 x.displaced[r, x.displaced_count[r]] = n
@@ -340,7 +363,7 @@ def _next_active(r: int, movers: int, k: Constants, x: Scratch) -> int:
     """
     cell = k.grid_cell
     if x.displaced_count[r] * _PATCH_SHARE > k.robots:  # many moved: a new grid is cheaper
-        grid_robots(r, k, x)
+        grid_robots(r, k, x, True)
         x.grid_epoch[r] += 1
         x.displaced_count[r] = 0
     _patch_grid(r, k, x)
@@ -406,8 +429,8 @@ def _patch_grid(r: int, k: Constants, x: Scratch) -> None:
 @inlined
 def _collision_pass(r: int, count: int, w: World, k: Constants, x: Scratch) -> int:
     """One Jacobi pass for the robots ``x.active[r, :count]``; returns how many moved."""
-    collide_range(r, 0, count, w, k, x)
-    return _pass_update(r, count, k, x)
+    collide_range(r, 0, count, False, w, k, x)
+    return _pass_update(r, count, False, k, x)
 
 
 @inlined
@@ -418,14 +441,18 @@ def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
     would change nothing. With a grid (large swarms) a pass after the first
     computes only the robots near a robot the pass before moved.
     """
-    count = resolve_begin(r, w, k, x)
-    collide_range(r, 0, count, w, k, x)
+    count = resolve_begin(r, True, w, k, x)
+    collide_range(r, 0, count, True, w, k, x)
     resolve_finish(r, count, w, k, x)
 
 
 @inlined
-def resolve_begin(r: int, w: World, k: Constants, x: Scratch) -> int:
-    """Bodies, the proposed positions as the first pass's start, its robots (all of them)."""
+def resolve_begin(r: int, copy: bool, w: World, k: Constants, x: Scratch) -> int:
+    """Bodies, the proposed positions as the first pass's start, its robots (all of them).
+
+    ``copy``: copy the robots to their grid slots here (else the caller does,
+    ``_index.copy_to_slots``, before the first pass).
+    """
     _bodies(r, w, k, x)
     for n in range(k.robots):
         x.x[r, n] = x.proposed[r, n, 0]
@@ -433,7 +460,7 @@ def resolve_begin(r: int, w: World, k: Constants, x: Scratch) -> int:
         x.active[r, n] = n
     count = k.robots
     if k.robot_grid:
-        grid_robots(r, k, x)
+        grid_robots(r, k, x, copy)
         x.grid_epoch[r] += 1  # nobody displaced from this grid yet
         x.displaced_count[r] = 0
         for j in range(k.robots):  # bucket by bucket: neighbours' buckets stay in cache
@@ -444,7 +471,7 @@ def resolve_begin(r: int, w: World, k: Constants, x: Scratch) -> int:
 @inlined
 def resolve_finish(r: int, count: int, w: World, k: Constants, x: Scratch) -> None:
     """After the first pass's ``collide_range``: its update, the other passes, the outcome."""
-    movers = _pass_update(r, count, k, x)
+    movers = _pass_update(r, count, True, k, x)
     for _ in range(1, k.collision_iterations):
         if movers == 0:
             break

@@ -17,7 +17,7 @@ from __future__ import annotations
 import itertools
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Final
 
 import numpy as np
@@ -44,6 +44,8 @@ from swarmtag.sim.fast._split import (
     split_begin,
     split_collide,
     split_collide_begin,
+    split_copy,
+    split_draw,
     split_finish,
     split_robots,
     thread_scratch,
@@ -66,6 +68,9 @@ _GROUPS_PER_THREAD: Final = 4
 """Runs go to the threads in this many groups per thread (runs end at different ticks)."""
 SPLIT_FROM: Final = 10_000
 """Robots of a run from which a batch of fewer runs than threads splits each tick's robots."""
+COPY_APART_FROM: Final = 100_000
+"""Robots of a split run from which the threads copy the robots to their grid slots at once
+(below, handing the copy to the threads costs more than it saves: docs/performance.md)."""
 
 
 class TagCacheFull(Exception):
@@ -238,6 +243,8 @@ class _Batch:
         # fewer runs than threads, many robots: each tick's robots are split over the threads
         self.split = threads > runs and robots >= SPLIT_FROM
         self.thread_scratch = [self.scratch]
+        self.drawn = np.full(runs, -1, dtype=np.int64)
+        """Split runs: the tick whose random numbers the buffers hold (``_split_run``)."""
         if self.split:
             self.thread_scratch += [thread_scratch(self.scratch) for _ in range(threads - 1)]
         else:
@@ -277,28 +284,51 @@ class _Batch:
             future.result()
 
     def _split_run(self, r: int, stop: int, turns: np.ndarray, first: int) -> None:
-        """Run ``r`` tick by tick to ``stop``, its end, or a full event buffer (``_split``)."""
+        """Run ``r`` tick by tick to ``stop``, its end, or a full event buffer (``_split``).
+
+        The next tick's random numbers are drawn on a second thread while
+        this tick finishes and the next begins (they are read only by the
+        robots' phases): ``self.drawn[r]`` is the tick whose numbers the
+        buffers hold, kept when the run pauses.
+        """
         w, k, x, s = self.world, self.constants, self.scratch, self.streams
+        assert self.pool is not None
         room = (k.robots + k.pickup_slots.shape[0]) * EVENT_SLOTS
         parts = len(self.thread_scratch)
         robots = _ranges(k.robots, parts)
-        while w.ended_at[r] < 0 and w.run_tick[r] < stop and x.failure[r] == 0:
-            if x.event_count[r] + room > x.event_tick.shape[1]:
-                return
-            t = int(w.run_tick[r]) + 1
-            row = t - first if k.walk_turn_ticks > 0 else 0
-            split_begin(r, t, s.motion[r], s.breakdown[r], s.radio[r], s.camera[r], w, k, x)
-            self._at_once(
-                split_robots,
-                [
-                    (r, t, lo, hi, turns, row, w, k, own)
-                    for (lo, hi), own in zip(robots, self.thread_scratch, strict=True)
-                ],
-            )
-            count = split_collide_begin(r, w, k, x)
-            pieces = zip(_ranges(count, parts), self.thread_scratch, strict=True)
-            self._at_once(split_collide, [(r, lo, hi, w, k, own) for (lo, hi), own in pieces])
-            split_finish(r, t, count, w, k, x)
+        streams = (r, s.motion[r], s.breakdown[r], s.radio[r], s.camera[r], k, x)
+        drawing: Future[None] | None = None
+        try:
+            while w.ended_at[r] < 0 and w.run_tick[r] < stop and x.failure[r] == 0:
+                if x.event_count[r] + room > x.event_tick.shape[1]:
+                    return
+                t = int(w.run_tick[r]) + 1
+                row = t - first if k.walk_turn_ticks > 0 else 0
+                if drawing is None and self.drawn[r] != t:
+                    split_draw(*streams)
+                split_begin(r, t, w, k, x)
+                if drawing is not None:
+                    drawing.result()
+                    drawing = None
+                self._at_once(
+                    split_robots,
+                    [
+                        (r, t, lo, hi, turns, row, w, k, own)
+                        for (lo, hi), own in zip(robots, self.thread_scratch, strict=True)
+                    ],
+                )
+                apart = k.robot_grid and k.robots >= COPY_APART_FROM
+                count = split_collide_begin(r, not apart, w, k, x)
+                if apart:
+                    self._at_once(split_copy, [(r, lo, hi, x) for lo, hi in robots])
+                pieces = zip(_ranges(count, parts), self.thread_scratch, strict=True)
+                self._at_once(split_collide, [(r, lo, hi, w, k, own) for (lo, hi), own in pieces])
+                drawing = self.pool.submit(split_draw, *streams)  # tick t + 1's numbers
+                self.drawn[r] = t + 1
+                split_finish(r, t, count, w, k, x)
+        finally:
+            if drawing is not None:
+                drawing.result()
 
     def advance_to(self, stop: int, turns: np.ndarray, first: int) -> None:
         """Every running run to tick ``stop`` (empties buffers a run filled on the way)."""

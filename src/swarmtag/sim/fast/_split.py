@@ -1,15 +1,20 @@
-"""One large run on several threads: a tick in five kernel calls, two of them split by robots.
+"""One large run on several threads: a tick in up to seven kernel calls, three split by robots.
 
 ``_tick.tick_run`` does a run's tick in one call, and the runner spreads runs
 over threads. A batch of fewer runs than threads with many robots (one
 warehouse, a million robots) instead steps each tick as
 
-1. ``split_begin`` (one thread): the random numbers, the robots' start, the
-   run's index of obstacles and robots, the advertising tags;
+0. ``split_draw`` (one thread): the tick's random numbers (one generator per
+   stream and run). Read only by step 2, so the runner draws the next
+   tick's while this tick's steps 5 and the next tick's step 1 run;
+1. ``split_begin`` (one thread): the robots' start, the run's index of
+   obstacles and robots, the advertising tags;
 2. ``split_robots`` on ranges of robots at once: sense, break down, decide,
    move (each robot reads the tick's start and writes only its own entries);
 3. ``split_collide_begin`` (one thread): bodies and the first collision
-   pass's robots;
+   pass's robots; with the robots' grid, each robot is copied to its grid
+   slot, here or, in the largest runs, by ``split_copy`` on ranges of
+   robots at once;
 4. ``split_collide`` on ranges of those at once: the first pass's new
    positions (it reads only the positions at the pass's start);
 5. ``split_finish`` (one thread): the first pass's update, the other passes
@@ -24,15 +29,18 @@ from __future__ import annotations
 
 import numpy as np
 
+from swarmtag.sim.fast._index import copy_to_slots
 from swarmtag.sim.fast._jit import jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 from swarmtag.sim.fast._motion import collide_range, resolve_begin, resolve_finish
-from swarmtag.sim.fast._tick import tick_begin, tick_end, tick_robots
+from swarmtag.sim.fast._tick import draw, tick_begin, tick_end, tick_robots
 
 __all__ = [
     "split_begin",
     "split_collide",
     "split_collide_begin",
+    "split_copy",
+    "split_draw",
     "split_finish",
     "split_robots",
     "thread_scratch",
@@ -50,19 +58,23 @@ def thread_scratch(x: Scratch) -> Scratch:
 
 
 @jit
-def split_begin(
+def split_draw(
     r: int,
-    t: int,
     motion: np.random.Generator,
     breakdown: np.random.Generator,
     radio: np.random.Generator,
     camera: np.random.Generator,
-    w: World,
     k: Constants,
     x: Scratch,
 ) -> None:
-    """Step 1 of tick ``t`` of run ``r`` (see the module docs)."""
-    tick_begin(r, t, motion, breakdown, radio, camera, w, k, x)
+    """Step 0: the random numbers of run ``r``'s next tick (see the module docs)."""
+    draw(r, motion, breakdown, radio, camera, k, x)
+
+
+@jit
+def split_begin(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
+    """Step 1 of tick ``t`` of run ``r``."""
+    tick_begin(r, t, w, k, x)
 
 
 @jit
@@ -82,16 +94,25 @@ def split_robots(
 
 
 @jit
-def split_collide_begin(r: int, w: World, k: Constants, x: Scratch) -> int:
-    """Step 3: returns how many robots the first collision pass computes."""
-    count: int = resolve_begin(r, w, k, x)
+def split_collide_begin(r: int, copy: bool, w: World, k: Constants, x: Scratch) -> int:
+    """Step 3: returns how many robots the first collision pass computes.
+
+    ``copy``: copy the robots to their grid slots here, on one thread.
+    """
+    count: int = resolve_begin(r, copy, w, k, x)
     return count
+
+
+@jit
+def split_copy(r: int, lo: int, hi: int, x: Scratch) -> None:
+    """Step 3b (with the robots' grid): robots ``lo .. hi - 1`` copied to their grid slots."""
+    copy_to_slots(r, lo, hi, x)
 
 
 @jit
 def split_collide(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
     """Step 4 for the first pass's robots ``x.active[r, lo:hi]``."""
-    collide_range(r, lo, hi, w, k, x)
+    collide_range(r, lo, hi, True, w, k, x)
 
 
 @jit

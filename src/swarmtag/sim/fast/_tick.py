@@ -46,7 +46,7 @@ def _unit(g0: float, g1: float) -> tuple[float, float]:
 
 
 @inlined
-def _draw(
+def draw(
     r: int,
     motion: np.random.Generator,
     breakdown: np.random.Generator,
@@ -55,7 +55,10 @@ def _draw(
     k: Constants,
     x: Scratch,
 ) -> None:
-    """This tick's numbers of each active stream, in the order ``RandomSource`` draws them."""
+    """A tick's numbers of each active stream, in the order ``RandomSource`` draws them.
+
+    Read only by the robots' sense, break-down and decide phases.
+    """
     for n in range(k.robots):
         g0 = motion.standard_normal()
         g1 = motion.standard_normal()
@@ -113,7 +116,8 @@ def tick_run(
 
     ``turns[r, row]`` are the tick's walk turns (when the walk turns).
     """
-    tick_begin(r, t, motion, breakdown, radio, camera, w, k, x)
+    draw(r, motion, breakdown, radio, camera, k, x)
+    tick_begin(r, t, w, k, x)
     robots = k.robots
     sense_robots(r, t, 0, robots, w, k, x)
     break_down_robots(r, 0, robots, w, k, x)
@@ -124,19 +128,8 @@ def tick_run(
 
 
 @inlined
-def tick_begin(
-    r: int,
-    t: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
-    w: World,
-    k: Constants,
-    x: Scratch,
-) -> None:
-    """The tick's random numbers, the robots' start, the run's index and advertising tags."""
-    _draw(r, motion, breakdown, radio, camera, k, x)
+def tick_begin(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
+    """The robots' start, the run's index and advertising tags (after the tick's ``draw``)."""
     for n in range(k.robots):
         x.before_mode[r, n] = w.mode[r, n]
         x.before_pos[r, n, 0] = w.robot_pos[r, n, 0]
