@@ -198,12 +198,21 @@ def test_one_run_split_over_threads_gives_the_same_bytes(scenario, runs, monkeyp
     assert whole.delivered.sum() + (whole.events.kind == "select").sum() > 0
 
 
-def test_robots_copied_to_their_grid_slots_on_every_thread_give_the_same_bytes(monkeypatch):
-    # from COPY_APART_FROM robots the threads copy the robots to the grid's slots at once
+def test_the_largest_split_runs_share_more_of_a_tick_and_give_the_same_bytes(monkeypatch):
+    # from SHARE_FROM robots the threads copy the robots to the grid's slots at once,
+    # and the robots' index is built beside the rest of the tick's start
     scenario = _wide(150, 40, 300)
     whole = simulate(scenario, Urgency(alpha=0.7), seed=5, runs=1, backend="fast", threads=1)
     splits = _count_splits(monkeypatch)
-    monkeypatch.setattr(fast_runner, "COPY_APART_FROM", 1)
+    monkeypatch.setattr(fast_runner, "SHARE_FROM", 1)
+    indexed: list[int] = []
+    index = fast_runner.split_index_robots
+
+    def counted_index(r: int, *rest: object) -> None:
+        indexed.append(r)
+        index(r, *rest)
+
+    monkeypatch.setattr(fast_runner, "split_index_robots", counted_index)
     copies: list[tuple[int, int]] = []
     original = fast_runner.split_copy
 
@@ -217,6 +226,7 @@ def test_robots_copied_to_their_grid_slots_on_every_thread_give_the_same_bytes(m
     assert splits
     assert (0, 75) in copies
     assert (75, 150) in copies
+    assert len(indexed) >= 300
 
 
 def test_a_split_run_paused_every_tick_draws_each_ticks_numbers_once(monkeypatch):

@@ -47,6 +47,7 @@ from swarmtag.sim.fast._split import (
     split_copy,
     split_draw,
     split_finish,
+    split_index_robots,
     split_robots,
     thread_scratch,
 )
@@ -68,9 +69,10 @@ _GROUPS_PER_THREAD: Final = 4
 """Runs go to the threads in this many groups per thread (runs end at different ticks)."""
 SPLIT_FROM: Final = 10_000
 """Robots of a run from which a batch of fewer runs than threads splits each tick's robots."""
-COPY_APART_FROM: Final = 100_000
-"""Robots of a split run from which the threads copy the robots to their grid slots at once
-(below, handing the copy to the threads costs more than it saves: docs/performance.md)."""
+SHARE_FROM: Final = 100_000
+"""Robots of a split run from which two more pieces of a tick go to the threads: the robots'
+copy to their grid slots, and their index beside the rest of the tick's start (below,
+handing them over costs more than it saves: docs/performance.md)."""
 
 
 class TagCacheFull(Exception):
@@ -306,7 +308,11 @@ class _Batch:
                 row = t - first if k.walk_turn_ticks > 0 else 0
                 if drawing is None and self.drawn[r] != t:
                     split_draw(*streams)
-                split_begin(r, t, w, k, x)
+                share = k.robots >= SHARE_FROM
+                indexing = self.pool.submit(split_index_robots, r, w, k, x) if share else None
+                split_begin(r, t, not share, w, k, x)
+                if indexing is not None:
+                    indexing.result()
                 if drawing is not None:
                     drawing.result()
                     drawing = None
@@ -317,7 +323,7 @@ class _Batch:
                         for (lo, hi), own in zip(robots, self.thread_scratch, strict=True)
                     ],
                 )
-                apart = k.robot_grid and k.robots >= COPY_APART_FROM
+                apart = k.robot_grid and share
                 count = split_collide_begin(r, not apart, w, k, x)
                 if apart:
                     self._at_once(split_copy, [(r, lo, hi, x) for lo, hi in robots])

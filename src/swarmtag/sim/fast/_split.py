@@ -1,4 +1,4 @@
-"""One large run on several threads: a tick in up to seven kernel calls, three split by robots.
+"""One large run on several threads: a tick in up to eight kernel calls, three split by robots.
 
 ``_tick.tick_run`` does a run's tick in one call, and the runner spreads runs
 over threads. A batch of fewer runs than threads with many robots (one
@@ -8,7 +8,9 @@ warehouse, a million robots) instead steps each tick as
    stream and run). Read only by step 2, so the runner draws the next
    tick's while this tick's steps 5 and the next tick's step 1 run;
 1. ``split_begin`` (one thread): the robots' start, the run's index of
-   obstacles and robots, the advertising tags;
+   obstacles and robots, the advertising tags; in the largest runs
+   ``split_index_robots`` builds the robots' index on another thread
+   meanwhile;
 2. ``split_robots`` on ranges of robots at once: sense, break down, decide,
    move (each robot reads the tick's start and writes only its own entries);
 3. ``split_collide_begin`` (one thread): bodies and the first collision
@@ -29,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from swarmtag.sim.fast._index import copy_to_slots
+from swarmtag.sim.fast._index import copy_to_slots, index_robots
 from swarmtag.sim.fast._jit import jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 from swarmtag.sim.fast._motion import collide_range, resolve_begin, resolve_finish
@@ -42,6 +44,7 @@ __all__ = [
     "split_copy",
     "split_draw",
     "split_finish",
+    "split_index_robots",
     "split_robots",
     "thread_scratch",
 ]
@@ -72,9 +75,15 @@ def split_draw(
 
 
 @jit
-def split_begin(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
-    """Step 1 of tick ``t`` of run ``r``."""
-    tick_begin(r, t, w, k, x)
+def split_begin(r: int, t: int, robots: bool, w: World, k: Constants, x: Scratch) -> None:
+    """Step 1 of tick ``t`` of run ``r`` (``robots``: with the robots' index)."""
+    tick_begin(r, t, robots, w, k, x)
+
+
+@jit
+def split_index_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
+    """Step 1b: the robots' index, on another thread than the rest of step 1."""
+    index_robots(r, w, k, x)
 
 
 @jit

@@ -117,7 +117,7 @@ def tick_run(
     ``turns[r, row]`` are the tick's walk turns (when the walk turns).
     """
     draw(r, motion, breakdown, radio, camera, k, x)
-    tick_begin(r, t, w, k, x)
+    tick_begin(r, t, True, w, k, x)
     robots = k.robots
     sense_robots(r, t, 0, robots, w, k, x)
     break_down_robots(r, 0, robots, w, k, x)
@@ -128,14 +128,19 @@ def tick_run(
 
 
 @inlined
-def tick_begin(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
-    """The robots' start, the run's index and advertising tags (after the tick's ``draw``)."""
+def tick_begin(r: int, t: int, robots: bool, w: World, k: Constants, x: Scratch) -> None:
+    """The robots' start, the run's index and advertising tags (after the tick's ``draw``).
+
+    ``robots``: the index of the robots too (else the caller builds it,
+    ``_index.index_robots``: it writes nothing the rest reads or writes).
+    """
     for n in range(k.robots):
         x.before_mode[r, n] = w.mode[r, n]
         x.before_pos[r, n, 0] = w.robot_pos[r, n, 0]
         x.before_pos[r, n, 1] = w.robot_pos[r, n, 1]
     index_obstacles(r, w, k, x)
-    index_robots(r, w, k, x)
+    if robots:
+        index_robots(r, w, k, x)
     if k.split:
         tags_advertising(r, t, w, k, x)
 
