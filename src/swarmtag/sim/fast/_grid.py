@@ -22,12 +22,12 @@ import math
 
 import numpy as np
 
-from swarmtag.sim.fast._jit import inlined, jit
+from swarmtag.sim.fast._jit import entry, inlined
 
 __all__ = ["fill", "near", "near_within", "table_bits"]
 
 
-@jit
+@entry
 def table_bits(bodies: int) -> int:
     """``bits`` of a table for ``bodies`` points: ``4**bits >= 2 * bodies``, at least 2."""
     bits = 2

@@ -21,6 +21,18 @@ Two measured costs shape the rest:
   ``alwaysinline``; numba's own inliner gave the same speed but compiled for
   2.5 minutes instead of 1.5): a tick is one function. Leaves that take only
   numbers are plain ``jit``.
+
+And two that shape the first compilation (measured on one core, the entry
+point of batched runs and then the split kernels: 529 s and 138 s before, 131 s
+and 51 s after):
+
+- only the entry points (``entry``, ``counted``) get numba's Python and C
+  wrappers; each wrapper unpacks every array of the state's tuples, and
+  making them for every inner function was most of the compile time
+  (``jit`` and ``inlined`` functions refuse calls from Python);
+- constants passed as arguments are widened from literals, so a function
+  is compiled once per argument type (``emit`` had been compiled ten times,
+  once per event kind).
 """
 
 from __future__ import annotations
@@ -33,8 +45,10 @@ from pathlib import Path
 from typing import Any, Final, TypeVar
 
 import numba
+from numba.core import sigutils, types
+from numba.core.registry import CPUDispatcher
 
-__all__ = ["counted", "discard_stale_machine_code", "inlined", "jit"]
+__all__ = ["counted", "discard_stale_machine_code", "entry", "inlined", "jit"]
 
 _STAMP: Final = "swarmtag-kernel-sources.sha256"
 """File beside the cached machine code: the digest of the sources it was compiled from."""
@@ -50,25 +64,81 @@ _OPTIONS: dict[str, Any] = {
 }
 
 
-def jit(function: _F) -> _F:
-    """Compile a kernel function: nopython, cached, IEEE arithmetic, no GIL, no refcounts.
+_INTERNAL: dict[str, Any] = {"no_cpython_wrapper": True, "no_cfunc_wrapper": True}
+"""Options of functions that only compiled code calls: no Python or C wrapper.
 
-    It must allocate nothing (no new arrays, lists or objects).
+Each wrapper unpacks every array of the state's tuples (hundreds of
+arguments): generating and compiling those wrappers for every inner
+function was most of the kernel's first compilation.
+"""
+
+
+class _CompiledOnly(CPUDispatcher):
+    """A dispatcher without a Python wrapper: a call from Python raises instead of crashing.
+
+    numba would jump to the missing wrapper's null address; calls from
+    compiled code are typed and linked without ever reaching ``__call__``.
     """
-    compiled: _F = _njit(**_OPTIONS, _nrt=False)(function)
+
+    def __call__(self, *args: object, **kwargs: object) -> None:
+        msg = (
+            f"{self.py_func.__qualname__} is compiled for calls from compiled code only; "
+            "Python calls the kernel through its entry points"
+        )
+        raise TypeError(msg)
+
+
+_normalize: Callable[[object], tuple[tuple[object, ...], Any]] = sigutils.normalize_signature
+_unliteral: Callable[[object], object] = types.unliteral
+
+
+def _compiled(function: _F, options: dict[str, Any], *, python_calls: bool) -> _F:
+    """``function`` compiled with ``options``, once per argument type.
+
+    numba types a module constant passed as an argument (an event kind, a
+    flag) as a literal and compiles the callee again for every value;
+    folding the constant in is LLVM's work once the callee is inlined, so
+    the literals are widened to their plain types before compiling. Without
+    ``python_calls`` the dispatcher refuses calls from Python (``_CompiledOnly``).
+    """
+    dispatcher: Any = _njit(**options)(function)
+    compile_literal: Callable[[object], object] = dispatcher.compile
+
+    def compile_plain(signature: object) -> object:
+        arguments, result = _normalize(signature)
+        plain = tuple(_unliteral(argument) for argument in arguments)
+        return compile_literal(plain if result is None else result(*plain))
+
+    dispatcher.compile = compile_plain
+    if not python_calls:
+        dispatcher.__class__ = _CompiledOnly
+    compiled: _F = dispatcher
     return compiled
+
+
+def jit(function: _F) -> _F:
+    """Compile a kernel function that compiled code calls: nopython, cached, IEEE, no GIL.
+
+    No reference counts and no Python wrapper; it must allocate nothing (no
+    new arrays, lists or objects).
+    """
+    return _compiled(function, {**_OPTIONS, **_INTERNAL, "_nrt": False}, python_calls=False)
+
+
+def entry(function: _F) -> _F:
+    """Like ``jit``, callable from Python (the runner's calls into the kernel)."""
+    return _compiled(function, {**_OPTIONS, "_nrt": False}, python_calls=True)
 
 
 def inlined(function: _F) -> _F:
     """Like ``jit``, and always inlined into its callers (functions that take the state)."""
-    compiled: _F = _njit(**_OPTIONS, _nrt=False, forceinline=True)(function)
-    return compiled
+    options = {**_OPTIONS, **_INTERNAL, "_nrt": False, "forceinline": True}
+    return _compiled(function, options, python_calls=False)
 
 
 def counted(function: _F) -> _F:
-    """Like ``jit`` with numba's reference counting on (typed lists, array views)."""
-    compiled: _F = _njit(**_OPTIONS)(function)
-    return compiled
+    """An entry point with numba's reference counting on (typed lists, array views)."""
+    return _compiled(function, _OPTIONS, python_calls=True)
 
 
 def _sources_digest() -> str:

@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from swarmtag.sim.fast._index import copy_to_slots, index_robots
-from swarmtag.sim.fast._jit import jit
+from swarmtag.sim.fast._jit import entry
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 from swarmtag.sim.fast._motion import collide_range, resolve_begin, resolve_finish
 from swarmtag.sim.fast._tick import draw, tick_begin, tick_end, tick_robots
@@ -60,7 +60,7 @@ def thread_scratch(x: Scratch) -> Scratch:
     )
 
 
-@jit
+@entry
 def split_draw(
     r: int,
     motion: np.random.Generator,
@@ -74,19 +74,19 @@ def split_draw(
     draw(r, motion, breakdown, radio, camera, k, x)
 
 
-@jit
+@entry
 def split_begin(r: int, t: int, robots: bool, w: World, k: Constants, x: Scratch) -> None:
     """Step 1 of tick ``t`` of run ``r`` (``robots``: with the robots' index)."""
     tick_begin(r, t, robots, w, k, x)
 
 
-@jit
+@entry
 def split_index_robots(r: int, w: World, k: Constants, x: Scratch) -> None:
     """Step 1b: the robots' index, on another thread than the rest of step 1."""
     index_robots(r, w, k, x)
 
 
-@jit
+@entry
 def split_robots(
     r: int,
     t: int,
@@ -102,7 +102,7 @@ def split_robots(
     tick_robots(r, t, lo, hi, turns, row, w, k, x)
 
 
-@jit
+@entry
 def split_collide_begin(r: int, copy: bool, w: World, k: Constants, x: Scratch) -> int:
     """Step 3: returns how many robots the first collision pass computes.
 
@@ -112,19 +112,19 @@ def split_collide_begin(r: int, copy: bool, w: World, k: Constants, x: Scratch) 
     return count
 
 
-@jit
+@entry
 def split_copy(r: int, lo: int, hi: int, x: Scratch) -> None:
     """Step 3b (with the robots' grid): robots ``lo .. hi - 1`` copied to their grid slots."""
     copy_to_slots(r, lo, hi, x)
 
 
-@jit
+@entry
 def split_collide(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
     """Step 4 for the first pass's robots ``x.active[r, lo:hi]``."""
     collide_range(r, lo, hi, True, w, k, x)
 
 
-@jit
+@entry
 def split_finish(r: int, t: int, count: int, w: World, k: Constants, x: Scratch) -> None:
     """Step 5: the rest of tick ``t``; the run's tick becomes ``t``."""
     resolve_finish(r, count, w, k, x)
