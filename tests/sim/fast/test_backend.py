@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import fields, replace
 
 import numpy as np
@@ -198,35 +199,51 @@ def test_one_run_split_over_threads_gives_the_same_bytes(scenario, runs, monkeyp
     assert whole.delivered.sum() + (whole.events.kind == "select").sum() > 0
 
 
-def test_the_largest_split_runs_share_more_of_a_tick_and_give_the_same_bytes(monkeypatch):
-    # from SHARE_FROM robots the threads copy the robots to the grid's slots at once,
-    # and the robots' index is built beside the rest of the tick's start
+def _record_split_calls(monkeypatch: pytest.MonkeyPatch) -> list[tuple[int, int]]:
+    """Every thread's call of ``split_ticks``: its part and the parts."""
+    calls: list[tuple[int, int]] = []
+    original = fast_runner.split_ticks
+
+    def recorded(part: int, parts: int, *rest: object) -> None:
+        calls.append((part, parts))
+        original(part, parts, *rest)
+
+    monkeypatch.setattr(fast_runner, "split_ticks", recorded)
+    return calls
+
+
+def test_a_split_run_on_three_threads_gives_the_same_bytes(monkeypatch):
     scenario = _wide(150, 40, 300)
     whole = simulate(scenario, Urgency(alpha=0.7), seed=5, runs=1, backend="fast", threads=1)
     splits = _count_splits(monkeypatch)
-    monkeypatch.setattr(fast_runner, "SHARE_FROM", 1)
-    indexed: list[int] = []
-    index = fast_runner.split_index_robots
-
-    def counted_index(r: int, *rest: object) -> None:
-        indexed.append(r)
-        index(r, *rest)
-
-    monkeypatch.setattr(fast_runner, "split_index_robots", counted_index)
-    copies: list[tuple[int, int]] = []
-    original = fast_runner.split_copy
-
-    def counted(r: int, lo: int, hi: int, x: object) -> None:
-        copies.append((lo, hi))
-        original(r, lo, hi, x)
-
-    monkeypatch.setattr(fast_runner, "split_copy", counted)
-    split = simulate(scenario, Urgency(alpha=0.7), seed=5, runs=1, backend="fast", threads=2)
+    calls = _record_split_calls(monkeypatch)
+    split = simulate(scenario, Urgency(alpha=0.7), seed=5, runs=1, backend="fast", threads=3)
     assert_same(whole, split)
     assert splits
-    assert (0, 75) in copies
-    assert (75, 150) in copies
-    assert len(indexed) >= 300
+    assert set(calls) == {(0, 3), (1, 3), (2, 3)}
+
+
+def test_a_split_run_whose_first_thread_fails_to_start_releases_the_others(monkeypatch):
+    # the other threads wait at a barrier for it: told, they return instead of spinning on
+    _count_splits(monkeypatch)
+    original = fast_runner.split_ticks
+    returned: list[int] = []
+
+    def failing(part: int, *rest: object) -> None:
+        if part == 0:
+            raise RuntimeError("part 0 never starts")
+        original(part, *rest)
+        returned.append(part)
+
+    monkeypatch.setattr(fast_runner, "split_ticks", failing)
+    scenario = _wide(150, 40, 300)
+    with ThreadPoolExecutor(1) as pool:  # a hang fails the test instead of the whole suite
+        future = pool.submit(
+            simulate, scenario, Urgency(alpha=0.7), seed=5, runs=1, backend="fast", threads=3
+        )
+        with pytest.raises(RuntimeError, match="part 0 never starts"):
+            future.result(timeout=120)
+    assert sorted(returned) == [1, 2]
 
 
 def test_a_split_run_paused_every_tick_draws_each_ticks_numbers_once(monkeypatch):

@@ -14,9 +14,8 @@ each tick can be looked at.
 
 from __future__ import annotations
 
-import itertools
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Final
 
@@ -40,17 +39,8 @@ from swarmtag.sim.fast._layout import (
     state_of,
     world_of,
 )
-from swarmtag.sim.fast._split import (
-    split_begin,
-    split_collide,
-    split_collide_begin,
-    split_copy,
-    split_draw,
-    split_finish,
-    split_index_robots,
-    split_robots,
-    thread_scratch,
-)
+from swarmtag.sim.fast._split import SYNC_DRAWN, split_ticks, thread_scratch
+from swarmtag.sim.fast._sync import SYNC_ABORT, sync_array
 from swarmtag.sim.fast._tag_cache import FAILURE_CACHE_FULL
 from swarmtag.sim.fast._tick import advance
 from swarmtag.sim.invariants import check_tick
@@ -69,10 +59,6 @@ _GROUPS_PER_THREAD: Final = 4
 """Runs go to the threads in this many groups per thread (runs end at different ticks)."""
 SPLIT_FROM: Final = 10_000
 """Robots of a run from which a batch of fewer runs than threads splits each tick's robots."""
-SHARE_FROM: Final = 100_000
-"""Robots of a split run from which two more pieces of a tick go to the threads: the robots'
-copy to their grid slots, and their index beside the rest of the tick's start (below,
-handing them over costs more than it saves: docs/performance.md)."""
 
 
 class TagCacheFull(Exception):
@@ -102,12 +88,6 @@ def _capacity(robots: int, slots: int) -> int:
     A tick makes at most ``EVENT_SLOTS`` rows per robot and one arrival per pick-up slot.
     """
     return max(256, 4 * EVENT_SLOTS * (robots + slots))
-
-
-def _ranges(count: int, parts: int) -> list[tuple[int, int]]:
-    """``0 .. count`` cut into ``parts`` contiguous ranges of nearly equal length."""
-    edges = [count * i // parts for i in range(parts + 1)]
-    return list(itertools.pairwise(edges))
 
 
 def default_threads() -> int:
@@ -277,64 +257,49 @@ class _Batch:
             self.scratch,
         )
 
-    def _at_once(self, kernel: Callable[..., None], calls: list[tuple[Any, ...]]) -> None:
-        """``kernel(*arguments)`` for every tuple of ``calls`` on the threads; the first here."""
-        assert self.pool is not None
-        futures = [self.pool.submit(kernel, *arguments) for arguments in calls[1:]]
-        kernel(*calls[0])
-        for future in futures:
-            future.result()
-
     def _split_run(self, r: int, stop: int, turns: np.ndarray, first: int) -> None:
         """Run ``r`` tick by tick to ``stop``, its end, or a full event buffer (``_split``).
 
-        The next tick's random numbers are drawn on a second thread while
-        this tick finishes and the next begins (they are read only by the
-        robots' phases): ``self.drawn[r]`` is the tick whose numbers the
-        buffers hold, kept when the run pauses.
+        Every thread runs ``split_ticks`` at once, this one part 0. If this
+        thread cannot run its part (Ctrl-C before the call), the others are
+        told (``SYNC_ABORT``) and return at their next barrier. ``self.drawn[r]``
+        is the tick whose random numbers the buffers hold, kept when the run pauses.
         """
-        w, k, x, s = self.world, self.constants, self.scratch, self.streams
         assert self.pool is not None
-        room = (k.robots + k.pickup_slots.shape[0]) * EVENT_SLOTS
+        s = self.streams
         parts = len(self.thread_scratch)
-        robots = _ranges(k.robots, parts)
-        streams = (r, s.motion[r], s.breakdown[r], s.radio[r], s.camera[r], k, x)
-        drawing: Future[None] | None = None
+        sync = sync_array()
+        sync[SYNC_DRAWN] = self.drawn[r]
+        calls = [
+            (
+                part,
+                parts,
+                r,
+                stop,
+                turns,
+                first,
+                s.motion[r],
+                s.breakdown[r],
+                s.radio[r],
+                s.camera[r],
+                sync,
+                self.world,
+                self.constants,
+                scratch,
+            )
+            for part, scratch in enumerate(self.thread_scratch)
+        ]
+        futures: list[Future[None]] = []
         try:
-            while w.ended_at[r] < 0 and w.run_tick[r] < stop and x.failure[r] == 0:
-                if x.event_count[r] + room > x.event_tick.shape[1]:
-                    return
-                t = int(w.run_tick[r]) + 1
-                row = t - first if k.walk_turn_ticks > 0 else 0
-                if drawing is None and self.drawn[r] != t:
-                    split_draw(*streams)
-                share = k.robots >= SHARE_FROM
-                indexing = self.pool.submit(split_index_robots, r, w, k, x) if share else None
-                split_begin(r, t, not share, w, k, x)
-                if indexing is not None:
-                    indexing.result()
-                if drawing is not None:
-                    drawing.result()
-                    drawing = None
-                self._at_once(
-                    split_robots,
-                    [
-                        (r, t, lo, hi, turns, row, w, k, own)
-                        for (lo, hi), own in zip(robots, self.thread_scratch, strict=True)
-                    ],
-                )
-                apart = k.robot_grid and share
-                count = split_collide_begin(r, not apart, w, k, x)
-                if apart:
-                    self._at_once(split_copy, [(r, lo, hi, x) for lo, hi in robots])
-                pieces = zip(_ranges(count, parts), self.thread_scratch, strict=True)
-                self._at_once(split_collide, [(r, lo, hi, w, k, own) for (lo, hi), own in pieces])
-                drawing = self.pool.submit(split_draw, *streams)  # tick t + 1's numbers
-                self.drawn[r] = t + 1
-                split_finish(r, t, count, w, k, x)
+            futures.extend(self.pool.submit(split_ticks, *arguments) for arguments in calls[1:])
+            split_ticks(*calls[0])
+        except BaseException:
+            sync[SYNC_ABORT] = 1
+            raise
         finally:
-            if drawing is not None:
-                drawing.result()
+            for future in futures:
+                future.result()
+        self.drawn[r] = sync[SYNC_DRAWN]
 
     def advance_to(self, stop: int, turns: np.ndarray, first: int) -> None:
         """Every running run to tick ``stop`` (empties buffers a run filled on the way)."""
