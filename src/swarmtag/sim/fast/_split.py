@@ -108,7 +108,7 @@ def split_ticks(
             if sync[SYNC_DRAWN] != t:
                 draw(r, motion, breakdown, radio, camera, k, x)
                 sync[SYNC_DRAWN] = t
-            tick_begin(r, t, False, w, k, x)
+            tick_begin(r, t, parts == 1, w, k, x)  # one part: no thread 1 to index
         elif part == 1:
             index_robots(r, w, k, x)
         if not barrier(sync, parts):
