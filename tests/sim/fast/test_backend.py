@@ -185,7 +185,8 @@ def _wide(robots: int, carriers: int, ticks: int, **extra: object) -> Scenario:
     [
         (_wide(150, 40, 600), 1),  # the robots' grid and the active collision passes
         (_wide(60, 100, 1500, **{"camera.occlusion": "carriers+robots", "walk.turn_interval": 0.4,
-                                 "realism.breakdown": 0.0002, "realism.detection_noise": 0.02}), 1),
+                                 "realism.breakdown": 0.0002, "realism.detection_noise": 0.02,
+                                 "realism.advertisement_loss": 0.1}), 1),
         (replace(Scenario.default(5, 10), ticks=400), 1),
     ],
     ids=["grids", "realism", "small"],

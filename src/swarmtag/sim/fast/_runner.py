@@ -39,8 +39,8 @@ from swarmtag.sim.fast._layout import (
     state_of,
     world_of,
 )
-from swarmtag.sim.fast._split import SYNC_DRAWN, split_ticks, thread_scratch
-from swarmtag.sim.fast._sync import SYNC_ABORT, sync_array
+from swarmtag.sim.fast._split import SYNC_DRAWN, split_sync, split_ticks, thread_scratch
+from swarmtag.sim.fast._sync import SYNC_ABORT
 from swarmtag.sim.fast._tag_cache import FAILURE_CACHE_FULL
 from swarmtag.sim.fast._tick import advance
 from swarmtag.sim.invariants import check_tick
@@ -268,8 +268,7 @@ class _Batch:
         assert self.pool is not None
         s = self.streams
         parts = len(self.thread_scratch)
-        sync = sync_array()
-        sync[SYNC_DRAWN] = self.drawn[r]
+        sync = split_sync(int(self.drawn[r]))
         calls = [
             (
                 part,

@@ -5,13 +5,11 @@ over threads. A batch of fewer runs than threads with many robots (one
 warehouse, a million robots) instead has every thread call ``split_ticks``
 at once; each tick is
 
-0. (thread 0, a call's first tick only) the tick's random numbers (one
-   generator per stream and run); read only by step 2, so the last thread
-   draws the next tick's during step 5;
 1. (thread 0) the robots' start, the run's index of obstacles, the
    advertising tags; thread 1 builds the robots' index meanwhile;
 2. (every thread, a range of robots each) sense, break down, decide, move:
-   each robot reads the tick's start and writes only its own entries;
+   each robot reads the tick's start and its random numbers, and writes
+   only its own entries;
 3. (thread 0) bodies and the first collision pass's robots; with the
    robots' grid, every thread then copies a range of robots to their grid
    slots;
@@ -20,9 +18,14 @@ at once; each tick is
 5. (thread 0) the first pass's update, the other passes (few robots), and
    every phase after the collisions.
 
-The threads wait for each other between the steps at ``_sync.barrier``, in
-compiled code (handing the steps out from Python cost a quarter of a
-20,000-robot tick). Each thread's ``Scratch`` has query buffers (``gathered``,
+The threads wait for each other between the steps at barriers, in compiled
+code (``_sync``; handing the steps out from Python cost a quarter of a
+20,000-robot tick). Only step 2 reads the tick's random numbers, so the next
+tick's are drawn from the end of step 2 to the start of the next step 2, in
+chunks (``_draws``), by whichever thread waits at a barrier meanwhile: one
+thread at a time (a token), in the streams' order, so the numbers are those
+of one thread drawing them all; before step 2, every thread draws until none
+is left. Each thread's ``Scratch`` has query buffers (``gathered``,
 ``near_*``) of its own (``thread_scratch``); everything else is shared. The
 result is ``tick_run``'s, bit for bit: no sum changes its order.
 """
@@ -33,22 +36,50 @@ from typing import Final
 
 import numpy as np
 
+from swarmtag.sim.fast._draws import DRAW_CHUNK, chunk_end, draw_range, draw_units
 from swarmtag.sim.fast._events import room_for_tick
 from swarmtag.sim.fast._index import copy_to_slots, index_robots
 from swarmtag.sim.fast._jit import entry, inlined
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 from swarmtag.sim.fast._motion import collide_range, resolve_begin, resolve_finish
-from swarmtag.sim.fast._sync import SYNC_VALUES, barrier
-from swarmtag.sim.fast._tick import draw, tick_begin, tick_end, tick_robots
+from swarmtag.sim.fast._sync import (
+    SYNC_ABORT,
+    SYNC_LINE,
+    SYNC_VALUES,
+    arrive,
+    atomic_add,
+    atomic_load,
+    atomic_store,
+    barrier,
+    passed,
+    pause,
+    sync_array,
+)
+from swarmtag.sim.fast._tick import tick_begin, tick_end, tick_robots
 
-__all__ = ["SYNC_DRAWN", "split_ticks", "thread_scratch"]
+__all__ = ["SYNC_DRAWN", "split_sync", "split_ticks", "thread_scratch"]
 
 SYNC_GO: Final = SYNC_VALUES
 """1 while the run steps on (thread 0 decides before each tick)."""
 SYNC_DRAWN: Final = SYNC_VALUES + 1
-"""The tick whose random numbers the buffers hold (-1: none yet)."""
+"""The tick whose random numbers the buffers hold, or are being drawn for (-1: none yet)."""
 SYNC_ACTIVE: Final = SYNC_VALUES + 2
 """Robots of the tick's first collision pass (step 3 to step 4)."""
+SYNC_DRAW_AT: Final = SYNC_VALUES + SYNC_LINE
+"""Units of ``SYNC_DRAWN``'s numbers drawn so far (``_draws``; all of them at or past
+``draw_units``)."""
+SYNC_DRAW_TOKEN: Final = SYNC_DRAW_AT + 1
+"""Non-zero while a thread draws (or tries to take the turn)."""
+_ALL_DRAWN: Final = 1 << 62
+"""``SYNC_DRAW_AT`` of a tick whose numbers are all in the buffers, whatever the units."""
+
+
+def split_sync(drawn: int) -> np.ndarray:
+    """A ``sync`` array for ``split_ticks``: the buffers hold all of tick ``drawn``'s numbers."""
+    sync = sync_array()
+    sync[SYNC_DRAWN] = drawn
+    sync[SYNC_DRAW_AT] = _ALL_DRAWN
+    return sync
 
 
 def thread_scratch(x: Scratch) -> Scratch:
@@ -63,8 +94,86 @@ def thread_scratch(x: Scratch) -> Scratch:
 
 @inlined
 def _part(count: int, part: int, parts: int) -> tuple[int, int]:
-    """Part ``part`` of ``0 .. count`` cut into ``parts`` contiguous ranges (as ``_ranges``)."""
+    """Part ``part`` of ``0 .. count`` cut into ``parts`` contiguous ranges."""
     return count * part // parts, count * (part + 1) // parts
+
+
+@inlined
+def _draw_chunk(
+    r: int,
+    motion: np.random.Generator,
+    breakdown: np.random.Generator,
+    radio: np.random.Generator,
+    camera: np.random.Generator,
+    sync: np.ndarray,
+    k: Constants,
+    x: Scratch,
+) -> bool:
+    """Draw the next chunk of ``SYNC_DRAWN``'s numbers if none are left to another thread.
+
+    False if all are drawn or another thread has the turn (the caller waits).
+    """
+    units = draw_units(k)
+    if atomic_load(sync, SYNC_DRAW_AT) >= units:
+        return False
+    if atomic_add(sync, SYNC_DRAW_TOKEN, 1) != 0:
+        atomic_add(sync, SYNC_DRAW_TOKEN, -1)
+        return False
+    first = atomic_load(sync, SYNC_DRAW_AT)
+    if first < units:  # another thread may have drawn the last chunk meanwhile
+        stop = chunk_end(first, DRAW_CHUNK, k)
+        draw_range(r, first, stop, motion, breakdown, radio, camera, k, x)
+        atomic_store(sync, SYNC_DRAW_AT, stop)
+    atomic_add(sync, SYNC_DRAW_TOKEN, -1)
+    return True
+
+
+@inlined
+def _meet(
+    parts: int,
+    r: int,
+    motion: np.random.Generator,
+    breakdown: np.random.Generator,
+    radio: np.random.Generator,
+    camera: np.random.Generator,
+    sync: np.ndarray,
+    k: Constants,
+    x: Scratch,
+) -> bool:
+    """``_sync.barrier``, drawing the next tick's numbers while waiting (after step 2 only)."""
+    round_now = arrive(sync, parts)
+    spins = 0
+    state = passed(sync, round_now)
+    while state == 0:
+        if not _draw_chunk(r, motion, breakdown, radio, camera, sync, k, x):
+            spins = pause(spins)
+        state = passed(sync, round_now)
+    return state > 0
+
+
+@inlined
+def _draw_rest(
+    r: int,
+    motion: np.random.Generator,
+    breakdown: np.random.Generator,
+    radio: np.random.Generator,
+    camera: np.random.Generator,
+    sync: np.ndarray,
+    k: Constants,
+    x: Scratch,
+) -> bool:
+    """Draw with the other threads until ``SYNC_DRAWN``'s numbers are all drawn.
+
+    False if a thread will not come (``SYNC_ABORT``).
+    """
+    spins = 0
+    units = draw_units(k)
+    while atomic_load(sync, SYNC_DRAW_AT) < units:
+        if atomic_load(sync, SYNC_ABORT) != 0:
+            return False
+        if not _draw_chunk(r, motion, breakdown, radio, camera, sync, k, x):
+            spins = pause(spins)
+    return True
 
 
 @entry
@@ -87,51 +196,54 @@ def split_ticks(
     """Thread ``part`` of ``parts``: run ``r`` tick by tick to ``stop``, its end or a full buffer.
 
     Every thread calls this at once with its own ``x`` (``thread_scratch``)
-    and the same ``sync`` (``_sync.sync_array``; ``sync[SYNC_DRAWN]``: the
-    tick whose random numbers the buffers hold, kept between calls). Thread
-    0 does the steps of one thread, the last thread draws the next tick's
-    numbers during step 5 (see the module docs).
-    Returns early, without finishing its tick, if another thread will not
-    come (``SYNC_ABORT``).
+    and the same ``sync`` (``split_sync``; ``sync[SYNC_DRAWN]``: the tick
+    whose random numbers the buffers hold, all drawn when the call returns,
+    kept between calls). Thread 0 does the steps of one thread (see the
+    module docs). Returns early, without finishing its tick, if another
+    thread will not come (``SYNC_ABORT``).
     """
     room = k.robots + k.pickup_slots.shape[0]
     lo, hi = _part(k.robots, part, parts)
     while True:
         if part == 0:
             go = w.ended_at[r] < 0 and w.run_tick[r] < stop and x.failure[r] == 0
-            sync[SYNC_GO] = 1 if go and room_for_tick(r, room, x) else 0
-        if not barrier(sync, parts) or sync[SYNC_GO] == 0:
+            go = go and room_for_tick(r, room, x)
+            sync[SYNC_GO] = 1 if go else 0
+            if go and sync[SYNC_DRAWN] != w.run_tick[r] + 1:  # a call's first tick, not drawn
+                sync[SYNC_DRAWN] = w.run_tick[r] + 1
+                atomic_store(sync, SYNC_DRAW_AT, 0)
+        if not _meet(parts, r, motion, breakdown, radio, camera, sync, k, x) or sync[SYNC_GO] == 0:
+            # the next tick's numbers all drawn before a pause (at once on SYNC_ABORT)
+            _draw_rest(r, motion, breakdown, radio, camera, sync, k, x)
             return
         t = w.run_tick[r] + 1
         row = t - first if k.walk_turn_ticks > 0 else 0
-        if part == 0:  # step 0 here only for a call's first tick: later, step 5 drew it
-            if sync[SYNC_DRAWN] != t:
-                draw(r, motion, breakdown, radio, camera, k, x)
-                sync[SYNC_DRAWN] = t
+        if part == 0:
             tick_begin(r, t, parts == 1, w, k, x)  # one part: no thread 1 to index
         elif part == 1:
             index_robots(r, w, k, x)
-        if not barrier(sync, parts):
+        drawn = _draw_rest(r, motion, breakdown, radio, camera, sync, k, x)
+        if not (drawn and barrier(sync, parts)):
             return
         tick_robots(r, t, lo, hi, turns, row, w, k, x)
-        if not barrier(sync, parts):
+        if part == 0:  # tick t + 1's numbers may be drawn once step 2 is over
+            sync[SYNC_DRAWN] = t + 1
+            atomic_store(sync, SYNC_DRAW_AT, 0)
+        if not barrier(sync, parts):  # no drawing here: step 2 still reads the numbers
             return
         if part == 0:
             sync[SYNC_ACTIVE] = resolve_begin(r, False, w, k, x)
-        if not barrier(sync, parts):
+        if not _meet(parts, r, motion, breakdown, radio, camera, sync, k, x):
             return
         if k.robot_grid:
             copy_to_slots(r, lo, hi, x)
-            if not barrier(sync, parts):
+            if not _meet(parts, r, motion, breakdown, radio, camera, sync, k, x):
                 return
         count = sync[SYNC_ACTIVE]
         pass_lo, pass_hi = _part(count, part, parts)
         collide_range(r, pass_lo, pass_hi, True, w, k, x)
-        if not barrier(sync, parts):
+        if not _meet(parts, r, motion, breakdown, radio, camera, sync, k, x):
             return
-        if part == parts - 1:  # tick t + 1's numbers, read only by its step 2
-            draw(r, motion, breakdown, radio, camera, k, x)
-            sync[SYNC_DRAWN] = t + 1
         if part == 0:
             resolve_finish(r, count, w, k, x)
             tick_end(r, t, w, k, x)

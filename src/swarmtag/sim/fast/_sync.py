@@ -30,25 +30,30 @@ from swarmtag.sim.fast._jit import jit
 
 __all__ = [
     "SYNC_ABORT",
+    "SYNC_LINE",
     "SYNC_SIZE",
+    "SYNC_VALUES",
+    "arrive",
     "atomic_add",
     "atomic_load",
     "atomic_store",
     "barrier",
+    "passed",
+    "pause",
     "sync_array",
 ]
 
-_LINE: Final = 8
+SYNC_LINE: Final = 8
 """int64 entries of a cache line: each counter on its own line."""
 SYNC_ARRIVED: Final = 0
 """Threads at the barrier now."""
-SYNC_ROUND: Final = 1 * _LINE
+SYNC_ROUND: Final = 1 * SYNC_LINE
 """Barriers passed: a waiting thread spins until it changes."""
-SYNC_ABORT: Final = 2 * _LINE
+SYNC_ABORT: Final = 2 * SYNC_LINE
 """Non-zero: a thread will not come (its caller failed); waiting threads return False."""
-SYNC_VALUES: Final = 3 * _LINE
-"""First of the entries the threads pass each other values in (``_split``)."""
-SYNC_SIZE: Final = 4 * _LINE
+SYNC_VALUES: Final = 3 * SYNC_LINE
+"""First of the entries the threads pass each other values in (``_split``; two lines)."""
+SYNC_SIZE: Final = 5 * SYNC_LINE
 
 _SPINS: Final = 256
 """Spins before a waiting thread gives its core up on each further check (more threads
@@ -130,23 +135,48 @@ _get_or_insert_function: Any = cgutils.get_or_insert_function
 
 
 @jit
-def barrier(sync: np.ndarray, parts: int) -> bool:
-    """Wait until all ``parts`` threads have arrived; False if one will not (``SYNC_ABORT``).
+def arrive(sync: np.ndarray, parts: int) -> int:
+    """Arrive at the barrier of ``parts`` threads: the round to wait out, or -1 if all are here.
 
     The last to arrive resets the count and starts the next round, which
-    releases the others; every thread's writes before the barrier are seen
-    by every thread after it.
+    releases the others.
     """
-    round_now = atomic_load(sync, SYNC_ROUND)
+    round_now: int = atomic_load(sync, SYNC_ROUND)
     if atomic_add(sync, SYNC_ARRIVED, 1) == parts - 1:
         atomic_store(sync, SYNC_ARRIVED, 0)
         atomic_add(sync, SYNC_ROUND, 1)
-        return True
+        return -1
+    return round_now
+
+
+@jit
+def passed(sync: np.ndarray, round_now: int) -> int:
+    """1 once round ``round_now`` (``arrive``'s) has passed, 0 while not, -1 on ``SYNC_ABORT``."""
+    if round_now < 0 or atomic_load(sync, SYNC_ROUND) != round_now:
+        return 1
+    if atomic_load(sync, SYNC_ABORT) != 0:
+        return -1
+    return 0
+
+
+@jit
+def pause(spins: int) -> int:
+    """One more spin of a waiting thread (``spins`` so far); past ``_SPINS`` it yields its core."""
+    if spins >= _SPINS:
+        _yield_core()
+    return spins + 1
+
+
+@jit
+def barrier(sync: np.ndarray, parts: int) -> bool:
+    """Wait until all ``parts`` threads have arrived; False if one will not (``SYNC_ABORT``).
+
+    Every thread's writes before the barrier are seen by every thread after it.
+    """
+    round_now = arrive(sync, parts)
     spins = 0
-    while atomic_load(sync, SYNC_ROUND) == round_now:
-        if atomic_load(sync, SYNC_ABORT) != 0:
-            return False
-        spins += 1
-        if spins > _SPINS:
-            _yield_core()
-    return True
+    state = passed(sync, round_now)
+    while state == 0:
+        spins = pause(spins)
+        state = passed(sync, round_now)
+    return state > 0

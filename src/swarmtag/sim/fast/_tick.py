@@ -25,6 +25,7 @@ from swarmtag.sim.fast._docking import (
     deliver_run,
     dock_robots,
 )
+from swarmtag.sim.fast._draws import draw
 from swarmtag.sim.fast._events import flush_slots, room_for_tick
 from swarmtag.sim.fast._index import index_obstacles, index_robots
 from swarmtag.sim.fast._jit import counted, inlined, jit
@@ -34,50 +35,6 @@ from swarmtag.sim.fast._orders import place_orders_run
 from swarmtag.sim.fast._sense import sense_robots, tags_advertising
 
 __all__ = ["advance", "tick_run"]
-
-
-@jit
-def _unit(g0: float, g1: float) -> tuple[float, float]:
-    """``randomness.unit_vectors`` for one pair of Gaussian numbers."""
-    length = math.sqrt(g0 * g0 + g1 * g1)
-    if length == 0:
-        return 1.0, 0.0
-    return g0 / length, g1 / length
-
-
-@inlined
-def draw(
-    r: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
-    k: Constants,
-    x: Scratch,
-) -> None:
-    """A tick's numbers of each active stream, in the order ``RandomSource`` draws them.
-
-    Read only by the robots' sense, break-down and decide phases.
-    """
-    for n in range(k.robots):
-        g0 = motion.standard_normal()
-        g1 = motion.standard_normal()
-        g2 = motion.standard_normal()
-        g3 = motion.standard_normal()
-        x.walk_in[r, n, 0], x.walk_in[r, n, 1] = _unit(g0, g1)
-        x.sidestep_in[r, n, 0], x.sidestep_in[r, n, 1] = _unit(g2, g3)
-    if k.breakdown > 0:
-        for n in range(k.robots):
-            x.breakdown_draw[r, n] = breakdown.random()
-    if k.advertisement_loss > 0:
-        for n in range(k.robots):
-            for c in range(k.carriers):
-                x.radio_draw[r, n, c] = radio.random()
-    if k.detection_noise > 0:
-        for n in range(k.robots):
-            for c in range(k.carriers):
-                x.noise[r, n, c, 0] = camera.standard_normal() * k.detection_noise
-                x.noise[r, n, c, 1] = camera.standard_normal() * k.detection_noise
 
 
 @inlined
