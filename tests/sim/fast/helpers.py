@@ -39,12 +39,6 @@ def assert_same(reference: SimResult, fast: SimResult) -> None:
         assert getattr(reference, name).tolist() == getattr(fast, name).tolist(), name
 
 
-_COMPARED: dict[tuple[object, ...], SimResult] = {}
-"""``compare``'s fast results by its arguments: another test module asking the same
-comparison (``test_tag_cache`` of ``test_equivalence``'s cases) checks its own
-properties on the result instead of running both backends again."""
-
-
 def compare(
     scenario: Scenario,
     policy: Policy,
@@ -54,10 +48,7 @@ def compare(
     run_offset: int = 0,
     **options: object,
 ) -> SimResult:
-    """Run both backends on the same runs, assert they agree; the fast result (not to modify)."""
-    key = (scenario, policy, seed, runs, run_offset, tuple(sorted(options.items())))
-    if key in _COMPARED:
-        return _COMPARED[key]
+    """Run both backends on the same runs, assert they agree; the fast result."""
     reference = simulate(
         scenario,
         policy,
@@ -71,5 +62,4 @@ def compare(
         scenario, policy, seed=seed, runs=runs, run_offset=run_offset, backend="fast", **options
     )
     assert_same(reference, fast)
-    _COMPARED[key] = fast
     return fast
