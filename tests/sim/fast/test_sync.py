@@ -2,16 +2,16 @@
 
 from concurrent.futures import ThreadPoolExecutor
 
+import numba
 import numpy as np
 import pytest
 
-from swarmtag.sim.fast._jit import entry
 from swarmtag.sim.fast._sync import SYNC_ABORT, SYNC_SIZE, atomic_add, barrier, sync_array
 
 ROUNDS = 20_000
 
 
-@entry
+@numba.njit(cache=False, nogil=True)  # not cached: it would keep old _sync code
 def _add_ones(counts: np.ndarray, rounds: int) -> int:
     """``counts[0] += 1`` ``rounds`` times, atomically; the largest value seen before an add."""
     seen = -1
@@ -20,7 +20,7 @@ def _add_ones(counts: np.ndarray, rounds: int) -> int:
     return seen
 
 
-@entry
+@numba.njit(cache=False, nogil=True)  # not cached: it would keep old _sync code
 def _rounds_in_step(sync: np.ndarray, written: np.ndarray, part: int, parts: int) -> int:
     """Each round every thread writes its entry, then checks the others' after a barrier.
 

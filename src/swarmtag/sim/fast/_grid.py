@@ -78,6 +78,40 @@ def fill(
 
 
 @inlined
+def _row_runs(low_x: int, high_x: int, bits: int) -> tuple[int, int, int]:
+    """How a row's buckets of cells ``low_x .. high_x`` lie in the table: ``(runs, first, last)``.
+
+    Unless the cells wrap around the fold, their buckets are side by side
+    (columns ``first .. last``), so their points are one run of slots (one
+    loop instead of three: fewer mispredicted branches); else one run per bucket.
+    """
+    fold = (1 << bits) - 1
+    first = low_x & fold
+    last = high_x & fold
+    runs = 1 if first <= last else high_x - low_x + 1
+    return runs, first, last
+
+
+@inlined
+def _run_slots(
+    r: int,
+    row: int,
+    run: int,
+    runs: int,
+    low_x: int,
+    first: int,
+    last: int,
+    bits: int,
+    start: np.ndarray,
+) -> tuple[int, int]:
+    """Slots of run ``run`` of ``_row_runs`` in the row of buckets starting at bucket ``row``."""
+    if runs == 1:
+        return start[r, row | first], start[r, (row | last) + 1]
+    b = row | ((low_x + run) & ((1 << bits) - 1))
+    return start[r, b], start[r, b + 1]
+
+
+@inlined
 def near(
     r: int,
     x: float,
@@ -93,18 +127,17 @@ def near(
     """Points of run ``r`` in the buckets of the cells within ``reach <= cell`` of ``(x, y)``.
 
     Writes them to ``out[r]`` and returns how many: ascending when
-    ``ordered`` (sums over bodies), else in bucket order (tests whose answer
-    does not depend on the order).
+    ``ordered`` (sums over bodies), else in bucket order, row by row (tests
+    whose answer does not depend on the order).
     """
     found = 0
     low_x = math.floor((x - reach) / cell)
-    high_x = math.floor((x + reach) / cell)
-    low_y = math.floor((y - reach) / cell)
-    high_y = math.floor((y + reach) / cell)
-    for gx in range(low_x, high_x + 1):
-        for gy in range(low_y, high_y + 1):
-            b = _bucket(gx, gy, bits)
-            for slot in range(start[r, b], start[r, b + 1]):
+    runs, first, last = _row_runs(low_x, math.floor((x + reach) / cell), bits)
+    for gy in range(math.floor((y - reach) / cell), math.floor((y + reach) / cell) + 1):
+        row = (gy & ((1 << bits) - 1)) << bits
+        for run in range(runs):
+            begin, end = _run_slots(r, row, run, runs, low_x, first, last, bits, start)
+            for slot in range(begin, end):
                 item = items[r, slot]
                 position = found
                 if ordered:  # insertion sort: the lists are short
@@ -137,11 +170,12 @@ def near_within(
     """
     found = 0
     low_x = math.floor((x - cell) / cell)
-    low_y = math.floor((y - cell) / cell)
-    for gx in range(low_x, math.floor((x + cell) / cell) + 1):
-        for gy in range(low_y, math.floor((y + cell) / cell) + 1):
-            b = _bucket(gx, gy, bits)
-            for slot in range(start[r, b], start[r, b + 1]):
+    runs, first, last = _row_runs(low_x, math.floor((x + cell) / cell), bits)
+    for gy in range(math.floor((y - cell) / cell), math.floor((y + cell) / cell) + 1):
+        row = (gy & ((1 << bits) - 1)) << bits
+        for run in range(runs):
+            begin, end = _run_slots(r, row, run, runs, low_x, first, last, bits, start)
+            for slot in range(begin, end):
                 if abs(x - item_at[r, slot, 0]) >= cell or abs(y - item_at[r, slot, 1]) >= cell:
                     continue
                 item = items[r, slot]
