@@ -10,39 +10,35 @@ import pytest
 
 from swarmtag.policy import Urgency
 from swarmtag.sim import Realism, Scenario
-from swarmtag.sim.fast._draws import chunk_end, draw, draw_range, draw_units
+from swarmtag.sim.fast._draws import STREAMS, chunk_end, draw, draw_range, draw_units
 from swarmtag.sim.fast._layout import Constants, Scratch, constants_of, scratch_for
+from swarmtag.sim.fast._pcg import states_of
 from swarmtag.sim.params import make_params
-from swarmtag.sim.randomness import Stream, stream
+from swarmtag.sim.randomness import stream, unit_vectors
 
 
 @numba.njit(cache=False)  # not cached: machine code cached here would keep old _draws code
-def _draw_whole(generators: tuple, k: Constants, x: Scratch) -> None:
+def _draw_whole(streams: np.ndarray, k: Constants, x: Scratch) -> None:
     """Run 0's tick drawn at once."""
-    motion, breakdown, radio, camera = generators
-    draw(0, motion, breakdown, radio, camera, k, x)
+    draw(0, streams, k, x)
 
 
 @numba.njit(cache=False)
-def _draw_in_chunks(generators: tuple, numbers: int, k: Constants, x: Scratch) -> int:
+def _draw_in_chunks(streams: np.ndarray, numbers: int, k: Constants, x: Scratch) -> int:
     """Run 0's tick drawn about ``numbers`` numbers at a time; returns how many chunks."""
-    motion, breakdown, radio, camera = generators
     unit = 0
     chunks = 0
     while unit < draw_units(k):
         stop = chunk_end(unit, numbers, k)
-        draw_range(0, unit, stop, motion, breakdown, radio, camera, k, x)
+        draw_range(0, unit, stop, streams, k, x)
         unit = stop
         chunks += 1
     return chunks
 
 
-STREAMS = (Stream.MOTION, Stream.BREAKDOWN, Stream.RADIO, Stream.CAMERA)
-
-
-def _generators(seed: int) -> tuple[np.random.Generator, ...]:
-    """Run 0's generators of the tick's four streams, in ``draw``'s order."""
-    return tuple(stream(seed, 0, purpose) for purpose in STREAMS)
+def _states(seed: int) -> np.ndarray:
+    """Run 0's generator states of the tick's four streams, in ``draw``'s order."""
+    return states_of([stream(seed, 0, purpose) for purpose in STREAMS])[None]
 
 
 DRAWN = ("walk_in", "sidestep_in", "breakdown_draw", "radio_draw", "noise")
@@ -58,9 +54,9 @@ def test_chunks_draw_the_numbers_of_one_draw(numbers, realism):
     params = make_params(scenario, Urgency(alpha=0.7))
     k = constants_of(params)
     whole, chunked = scratch_for(1, k, 256), scratch_for(1, k, 256)
-    generators = _generators(3), _generators(3)
-    _draw_whole(generators[0], k, whole)
-    chunks = _draw_in_chunks(generators[1], numbers, k, chunked)
+    states = _states(3), _states(3)
+    _draw_whole(states[0], k, whole)
+    chunks = _draw_in_chunks(states[1], numbers, k, chunked)
     for name in DRAWN:
         np.testing.assert_array_equal(getattr(whole, name), getattr(chunked, name), err_msg=name)
     assert np.abs(whole.walk_in).sum() > 0  # the buffers were written
@@ -68,8 +64,28 @@ def test_chunks_draw_the_numbers_of_one_draw(numbers, realism):
         assert np.abs(whole.noise).sum() > 0
         assert whole.radio_draw.sum() > 0
         assert whole.breakdown_draw.sum() > 0
-    for first, second in zip(*generators, strict=True):  # every stream left at the same place
-        assert first.random() == second.random()
+    np.testing.assert_array_equal(states[0], states[1])  # every stream left at the same place
+    assert not np.array_equal(states[0], _states(3))  # and moved on
     assert chunks >= len(STREAMS)  # a chunk never spans two streams
     if numbers < 4 * 9:  # fewer numbers than the motion stream's: it was cut
         assert chunks > len(STREAMS)
+
+
+def test_a_tick_draws_the_reference_streams_numbers():
+    imperfect = Realism(breakdown=0.001, advertisement_loss=0.2, detection_noise=0.03)
+    scenario = replace(Scenario.default(9, 5), realism=imperfect)
+    params = make_params(scenario, Urgency(alpha=0.7))
+    k = constants_of(params)
+    x = scratch_for(1, k, 256)
+    states = _states(5)
+    for _ in range(3):  # the third tick: each stream carries on where the last tick left it
+        _draw_whole(states, k, x)
+    n, c = params.robots, params.carriers
+    motion, breakdown, radio, camera = (stream(5, 0, purpose) for purpose in STREAMS)
+    gaussians = motion.standard_normal((3, n, 4))[2]
+    np.testing.assert_array_equal(x.walk_in[0], unit_vectors(gaussians[:, :2]))
+    np.testing.assert_array_equal(x.sidestep_in[0], unit_vectors(gaussians[:, 2:]))
+    np.testing.assert_array_equal(x.breakdown_draw[0], breakdown.random((3, n))[2])
+    np.testing.assert_array_equal(x.radio_draw[0], radio.random((3, n, c))[2])
+    noise = camera.standard_normal((3, n, c, 2))[2] * params.detection_noise
+    np.testing.assert_array_equal(x.noise[0], noise)

@@ -19,9 +19,13 @@ import numpy as np
 
 from swarmtag.sim.fast._jit import inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch
+from swarmtag.sim.fast._pcg import standard_normal, uniform
+from swarmtag.sim.randomness import Stream
 
-__all__ = ["DRAW_CHUNK", "chunk_end", "draw", "draw_range", "draw_units"]
+__all__ = ["DRAW_CHUNK", "STREAMS", "chunk_end", "draw", "draw_range", "draw_units"]
 
+STREAMS = (Stream.MOTION, Stream.BREAKDOWN, Stream.RADIO, Stream.CAMERA)
+"""The tick's streams, in the order they draw: the rows of a run's generator states."""
 DRAW_CHUNK = 512
 """Numbers a thread draws at a time for a split run (about 5 µs: a waiting thread is back soon)."""
 
@@ -66,48 +70,48 @@ def chunk_end(unit: int, numbers: int, k: Constants) -> int:
 
 @inlined
 def draw_range(
-    r: int,
-    first: int,
-    stop: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
-    k: Constants,
-    x: Scratch,
+    r: int, first: int, stop: int, streams: np.ndarray, k: Constants, x: Scratch
 ) -> None:
-    """Units ``first .. stop - 1`` of run ``r``'s tick: read only by the robots' phases."""
+    """Units ``first .. stop - 1`` of run ``r``'s tick: read only by the robots' phases.
+
+    ``streams[r]``: the run's generators (``_pcg``), one row per stream in
+    ``STREAMS``' order, advanced in place; each stream's state stays in
+    registers while its units draw.
+    """
     robots = k.robots
+    state = streams[r]
+    high, low, inc_high, inc_low = state[0, 0], state[0, 1], state[0, 2], state[0, 3]
     for n in range(max(first, 0), min(stop, robots)):
-        g0 = motion.standard_normal()
-        g1 = motion.standard_normal()
-        g2 = motion.standard_normal()
-        g3 = motion.standard_normal()
+        g0, high, low = standard_normal(high, low, inc_high, inc_low)
+        g1, high, low = standard_normal(high, low, inc_high, inc_low)
+        g2, high, low = standard_normal(high, low, inc_high, inc_low)
+        g3, high, low = standard_normal(high, low, inc_high, inc_low)
         x.walk_in[r, n, 0], x.walk_in[r, n, 1] = _unit(g0, g1)
         x.sidestep_in[r, n, 0], x.sidestep_in[r, n, 1] = _unit(g2, g3)
+    state[0, 0], state[0, 1] = high, low
     if k.breakdown > 0:
+        high, low, inc_high, inc_low = state[1, 0], state[1, 1], state[1, 2], state[1, 3]
         for n in range(max(first, robots) - robots, min(stop, 2 * robots) - robots):
-            x.breakdown_draw[r, n] = breakdown.random()
+            x.breakdown_draw[r, n], high, low = uniform(high, low, inc_high, inc_low)
+        state[1, 0], state[1, 1] = high, low
     if k.advertisement_loss > 0:
+        high, low, inc_high, inc_low = state[2, 0], state[2, 1], state[2, 2], state[2, 3]
         for n in range(max(first, 2 * robots) - 2 * robots, min(stop, 3 * robots) - 2 * robots):
             for c in range(k.carriers):
-                x.radio_draw[r, n, c] = radio.random()
+                x.radio_draw[r, n, c], high, low = uniform(high, low, inc_high, inc_low)
+        state[2, 0], state[2, 1] = high, low
     if k.detection_noise > 0:
+        high, low, inc_high, inc_low = state[3, 0], state[3, 1], state[3, 2], state[3, 3]
         for n in range(max(first, 3 * robots) - 3 * robots, min(stop, 4 * robots) - 3 * robots):
             for c in range(k.carriers):
-                x.noise[r, n, c, 0] = camera.standard_normal() * k.detection_noise
-                x.noise[r, n, c, 1] = camera.standard_normal() * k.detection_noise
+                g0, high, low = standard_normal(high, low, inc_high, inc_low)
+                g1, high, low = standard_normal(high, low, inc_high, inc_low)
+                x.noise[r, n, c, 0] = g0 * k.detection_noise
+                x.noise[r, n, c, 1] = g1 * k.detection_noise
+        state[3, 0], state[3, 1] = high, low
 
 
 @inlined
-def draw(
-    r: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
-    k: Constants,
-    x: Scratch,
-) -> None:
+def draw(r: int, streams: np.ndarray, k: Constants, x: Scratch) -> None:
     """Every number of run ``r``'s tick, in the order ``RandomSource`` draws them."""
-    draw_range(r, 0, draw_units(k), motion, breakdown, radio, camera, k, x)
+    draw_range(r, 0, draw_units(k), streams, k, x)

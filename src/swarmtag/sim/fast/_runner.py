@@ -15,18 +15,17 @@ each tick can be looked at.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Final
 
 import numpy as np
-from numba.typed import List
 
 from swarmtag._interrupt import checkpoint
 from swarmtag.errors import SimulationError
 from swarmtag.io import MISSING_ID
 from swarmtag.sim.events import EventKind, EventRecorder, RobotEvents, TickEvents
 from swarmtag.sim.fast._docking import FAILURE_LOWERED, FAILURE_NOT_PICKED_UP
+from swarmtag.sim.fast._draws import STREAMS
 from swarmtag.sim.fast._layout import (
     EVENT_SLOTS,
     Constants,
@@ -39,6 +38,7 @@ from swarmtag.sim.fast._layout import (
     state_of,
     world_of,
 )
+from swarmtag.sim.fast._pcg import STATE_WORDS, states_of
 from swarmtag.sim.fast._split import SYNC_DRAWN, split_sync, split_ticks, thread_scratch
 from swarmtag.sim.fast._sync import SYNC_ABORT
 from swarmtag.sim.fast._tag_cache import FAILURE_CACHE_FULL
@@ -101,20 +101,21 @@ def default_threads() -> int:
 
 
 class _Streams:
-    """Each run's generators of the kernel's streams."""
+    """Each run's generators of the kernel's streams, and of the walk's turns."""
 
     def __init__(self, params: Params, seed: int, run_ids: list[int]) -> None:
-        def generators(purpose: Stream) -> Sequence[np.random.Generator]:
-            listed: Sequence[np.random.Generator] = List(
-                [stream(seed, run, purpose) for run in run_ids]
-            )
-            return listed
-
-        # a stream that is off is never drawn from: the motion list stands in for it
-        self.motion = generators(Stream.MOTION)
-        self.breakdown = generators(Stream.BREAKDOWN) if params.breakdown > 0 else self.motion
-        self.radio = generators(Stream.RADIO) if params.advertisement_loss > 0 else self.motion
-        self.camera = generators(Stream.CAMERA) if params.detection_noise > 0 else self.motion
+        on = {
+            Stream.MOTION: True,
+            Stream.BREAKDOWN: params.breakdown > 0,
+            Stream.RADIO: params.advertisement_loss > 0,
+            Stream.CAMERA: params.detection_noise > 0,
+        }
+        self.states = np.zeros((len(run_ids), len(STREAMS), STATE_WORDS), dtype=np.uint64)
+        """(runs, streams, words): the kernel's generator states (``_pcg``), advanced in place."""
+        for row, purpose in enumerate(STREAMS):
+            if on[purpose]:  # a stream that is off is never drawn from
+                generators = [stream(seed, run, purpose) for run in run_ids]
+                self.states[:, row] = states_of(generators)
         self._walk = (
             [stream(seed, run, Stream.WALK) for run in run_ids]
             if params.walk_turn_ticks > 0
@@ -248,10 +249,7 @@ class _Batch:
             stop,
             turns,
             first,
-            s.motion,
-            s.breakdown,
-            s.radio,
-            s.camera,
+            s.states,
             self.world,
             self.constants,
             self.scratch,
@@ -277,10 +275,7 @@ class _Batch:
                 stop,
                 turns,
                 first,
-                s.motion[r],
-                s.breakdown[r],
-                s.radio[r],
-                s.camera[r],
+                s.states,
                 sync,
                 self.world,
                 self.constants,

@@ -6,7 +6,7 @@ warehouse, a million robots) instead has every thread call ``split_ticks``
 at once; each tick is
 
 1. (thread 0) the robots' start, the run's index of obstacles, the
-   advertising tags; thread 1 builds the robots' index meanwhile;
+   advertising tags;
 2. (every thread, a range of robots each) sense, break down, decide, move:
    each robot reads the tick's start and its random numbers, and writes
    only its own entries;
@@ -15,8 +15,12 @@ at once; each tick is
    slots;
 4. (every thread, a range each) the first pass's new positions (it reads
    only the positions at the pass's start);
-5. (thread 0) the first pass's update, the other passes (few robots), and
-   every phase after the collisions.
+5. (thread 0) the first pass's update, the other passes (few robots),
+   arrivals and docking (``tick_settle``: the last moves of the tick);
+6. (thread 0) every later phase (``tick_finish``), while thread 1 builds
+   the robots' index of the next tick (they stand where it starts), so
+   that step 1 of the next tick is short (the index of a call's first
+   tick is built in its step 1).
 
 The threads wait for each other between the steps at barriers, in compiled
 code (``_sync``; handing the steps out from Python cost a quarter of a
@@ -55,7 +59,7 @@ from swarmtag.sim.fast._sync import (
     pause,
     sync_array,
 )
-from swarmtag.sim.fast._tick import tick_begin, tick_end, tick_robots
+from swarmtag.sim.fast._tick import tick_begin, tick_finish, tick_robots, tick_settle
 
 __all__ = ["SYNC_DRAWN", "split_sync", "split_ticks", "thread_scratch"]
 
@@ -101,10 +105,7 @@ def _part(count: int, part: int, parts: int) -> tuple[int, int]:
 @inlined
 def _draw_chunk(
     r: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
+    streams: np.ndarray,
     sync: np.ndarray,
     k: Constants,
     x: Scratch,
@@ -122,7 +123,7 @@ def _draw_chunk(
     first = atomic_load(sync, SYNC_DRAW_AT)
     if first < units:  # another thread may have drawn the last chunk meanwhile
         stop = chunk_end(first, DRAW_CHUNK, k)
-        draw_range(r, first, stop, motion, breakdown, radio, camera, k, x)
+        draw_range(r, first, stop, streams, k, x)
         atomic_store(sync, SYNC_DRAW_AT, stop)
     atomic_add(sync, SYNC_DRAW_TOKEN, -1)
     return True
@@ -132,10 +133,7 @@ def _draw_chunk(
 def _meet(
     parts: int,
     r: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
+    streams: np.ndarray,
     sync: np.ndarray,
     k: Constants,
     x: Scratch,
@@ -145,7 +143,7 @@ def _meet(
     spins = 0
     state = passed(sync, round_now)
     while state == 0:
-        if not _draw_chunk(r, motion, breakdown, radio, camera, sync, k, x):
+        if not _draw_chunk(r, streams, sync, k, x):
             spins = pause(spins)
         state = passed(sync, round_now)
     return state > 0
@@ -154,10 +152,7 @@ def _meet(
 @inlined
 def _draw_rest(
     r: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
+    streams: np.ndarray,
     sync: np.ndarray,
     k: Constants,
     x: Scratch,
@@ -171,9 +166,38 @@ def _draw_rest(
     while atomic_load(sync, SYNC_DRAW_AT) < units:
         if atomic_load(sync, SYNC_ABORT) != 0:
             return False
-        if not _draw_chunk(r, motion, breakdown, radio, camera, sync, k, x):
+        if not _draw_chunk(r, streams, sync, k, x):
             spins = pause(spins)
     return True
+
+
+@inlined
+def _first_pass(
+    part: int,
+    parts: int,
+    r: int,
+    streams: np.ndarray,
+    sync: np.ndarray,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> int:
+    """Steps 3 and 4: the first collision pass; its robots, or -1 if a thread will not come."""
+    if part == 0:
+        sync[SYNC_ACTIVE] = resolve_begin(r, False, w, k, x)
+    if not _meet(parts, r, streams, sync, k, x):
+        return -1
+    if k.robot_grid:
+        lo, hi = _part(k.robots, part, parts)
+        copy_to_slots(r, lo, hi, x)
+        if not _meet(parts, r, streams, sync, k, x):
+            return -1
+    count: int = sync[SYNC_ACTIVE]
+    pass_lo, pass_hi = _part(count, part, parts)
+    collide_range(r, pass_lo, pass_hi, True, w, k, x)
+    if not _meet(parts, r, streams, sync, k, x):
+        return -1
+    return count
 
 
 @entry
@@ -184,10 +208,7 @@ def split_ticks(
     stop: int,
     turns: np.ndarray,
     first: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
+    streams: np.ndarray,
     sync: np.ndarray,
     w: World,
     k: Constants,
@@ -204,6 +225,7 @@ def split_ticks(
     """
     room = k.robots + k.pickup_slots.shape[0]
     lo, hi = _part(k.robots, part, parts)
+    indexed = False  # thread 1: the robots' index of the next tick built (at the last tick's end)
     while True:
         if part == 0:
             go = w.ended_at[r] < 0 and w.run_tick[r] < stop and x.failure[r] == 0
@@ -212,17 +234,17 @@ def split_ticks(
             if go and sync[SYNC_DRAWN] != w.run_tick[r] + 1:  # a call's first tick, not drawn
                 sync[SYNC_DRAWN] = w.run_tick[r] + 1
                 atomic_store(sync, SYNC_DRAW_AT, 0)
-        if not _meet(parts, r, motion, breakdown, radio, camera, sync, k, x) or sync[SYNC_GO] == 0:
+        if not _meet(parts, r, streams, sync, k, x) or sync[SYNC_GO] == 0:
             # the next tick's numbers all drawn before a pause (at once on SYNC_ABORT)
-            _draw_rest(r, motion, breakdown, radio, camera, sync, k, x)
+            _draw_rest(r, streams, sync, k, x)
             return
         t = w.run_tick[r] + 1
         row = t - first if k.walk_turn_ticks > 0 else 0
         if part == 0:
             tick_begin(r, t, parts == 1, w, k, x)  # one part: no thread 1 to index
-        elif part == 1:
+        elif part == 1 and not indexed:  # a call's first tick
             index_robots(r, w, k, x)
-        drawn = _draw_rest(r, motion, breakdown, radio, camera, sync, k, x)
+        drawn = _draw_rest(r, streams, sync, k, x)
         if not (drawn and barrier(sync, parts)):
             return
         tick_robots(r, t, lo, hi, turns, row, w, k, x)
@@ -231,20 +253,18 @@ def split_ticks(
             atomic_store(sync, SYNC_DRAW_AT, 0)
         if not barrier(sync, parts):  # no drawing here: step 2 still reads the numbers
             return
-        if part == 0:
-            sync[SYNC_ACTIVE] = resolve_begin(r, False, w, k, x)
-        if not _meet(parts, r, motion, breakdown, radio, camera, sync, k, x):
-            return
-        if k.robot_grid:
-            copy_to_slots(r, lo, hi, x)
-            if not _meet(parts, r, motion, breakdown, radio, camera, sync, k, x):
-                return
-        count = sync[SYNC_ACTIVE]
-        pass_lo, pass_hi = _part(count, part, parts)
-        collide_range(r, pass_lo, pass_hi, True, w, k, x)
-        if not _meet(parts, r, motion, breakdown, radio, camera, sync, k, x):
+        count = _first_pass(part, parts, r, streams, sync, w, k, x)
+        if count < 0:
             return
         if part == 0:
             resolve_finish(r, count, w, k, x)
-            tick_end(r, t, w, k, x)
+            tick_settle(r, t, w, k, x)
+        if parts > 1:  # the robots stand where tick t + 1 starts: thread 1 indexes them
+            if not _meet(parts, r, streams, sync, k, x):
+                return
+            if part == 1:
+                index_robots(r, w, k, x)
+                indexed = True
+        if part == 0:
+            tick_finish(r, t, w, k, x)
             w.run_tick[r] = t

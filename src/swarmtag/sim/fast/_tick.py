@@ -13,7 +13,6 @@ same order; the correlated walk's turns come ready-made from the caller.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
@@ -28,7 +27,7 @@ from swarmtag.sim.fast._docking import (
 from swarmtag.sim.fast._draws import draw
 from swarmtag.sim.fast._events import flush_slots, room_for_tick
 from swarmtag.sim.fast._index import index_obstacles, index_robots
-from swarmtag.sim.fast._jit import counted, inlined, jit
+from swarmtag.sim.fast._jit import entry, inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
 from swarmtag.sim.fast._motion import move_robots, resolve_run
 from swarmtag.sim.fast._orders import place_orders_run
@@ -61,10 +60,7 @@ def tick_run(
     t: int,
     turns: np.ndarray,
     row: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
+    streams: np.ndarray,
     w: World,
     k: Constants,
     x: Scratch,
@@ -73,7 +69,7 @@ def tick_run(
 
     ``turns[r, row]`` are the tick's walk turns (when the walk turns).
     """
-    draw(r, motion, breakdown, radio, camera, k, x)
+    draw(r, streams, k, x)
     tick_begin(r, t, True, w, k, x)
     robots = k.robots
     sense_robots(r, t, 0, robots, w, k, x)
@@ -130,9 +126,21 @@ def tick_robots(
 @inlined
 def tick_end(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     """Every phase after the collisions: docking, lifts, deliveries, end of tick, orders."""
-    robots = k.robots
+    tick_settle(r, t, w, k, x)
+    tick_finish(r, t, w, k, x)
+
+
+@inlined
+def tick_settle(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
+    """Arrivals and docking: after them no robot moves again this tick (``tick_finish``)."""
     arrive_run(r, 4 * t, w, k, x)
-    dock_robots(r, 0, robots, w, x)
+    dock_robots(r, 0, k.robots, w, x)
+
+
+@inlined
+def tick_finish(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
+    """Lifts, deliveries, end of tick, orders, events: robots' positions read, never written."""
+    robots = k.robots
     lifted = answer_lifts(r, t, 4 * t + 2, w, k, x)
     carry_robots(r, 0, robots, w, k, x)
     deliver_run(r, t, lifted, w, k, x)
@@ -147,10 +155,7 @@ def _run_to(
     until: int,
     turns: np.ndarray,
     turns_from: int,
-    motion: np.random.Generator,
-    breakdown: np.random.Generator,
-    radio: np.random.Generator,
-    camera: np.random.Generator,
+    streams: np.ndarray,
     w: World,
     k: Constants,
     x: Scratch,
@@ -161,20 +166,17 @@ def _run_to(
             return
         t = w.run_tick[r] + 1
         row = t - turns_from if k.walk_turn_ticks > 0 else 0
-        tick_run(r, t, turns, row, motion, breakdown, radio, camera, w, k, x)
+        tick_run(r, t, turns, row, streams, w, k, x)
         w.run_tick[r] = t
 
 
-@counted
+@entry
 def advance(
     rows: np.ndarray,
     until: int,
     turns: np.ndarray,
     turns_from: int,
-    motion: Sequence[np.random.Generator],
-    breakdown: Sequence[np.random.Generator],
-    radio: Sequence[np.random.Generator],
-    camera: Sequence[np.random.Generator],
+    streams: np.ndarray,
     w: World,
     k: Constants,
     x: Scratch,
@@ -182,10 +184,9 @@ def advance(
     """Advance the runs ``rows`` to tick ``until`` (or their end, or until a buffer is full).
 
     ``turns[r, t - turns_from]`` holds run ``r``'s walk turns of tick ``t``
-    (``(cos, sin)`` per robot) when the walk turns; ``motion`` ... ``camera``
-    are typed lists of each run's generators. Only this entry point counts
-    references (typed lists); each run's ticks run in ``_run_to``, which does not.
+    (``(cos, sin)`` per robot) when the walk turns; ``streams[r]`` are run
+    ``r``'s generator states (``_draws.STREAMS``' rows, ``_pcg``), advanced in place.
     """
     for i in range(rows.shape[0]):
         r = rows[i]
-        _run_to(r, until, turns, turns_from, motion[r], breakdown[r], radio[r], camera[r], w, k, x)
+        _run_to(r, until, turns, turns_from, streams, w, k, x)
