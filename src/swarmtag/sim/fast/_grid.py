@@ -67,8 +67,10 @@ def fill(
         b = _bucket(math.floor(xs[r, i] / cell), math.floor(ys[r, i] / cell), bits)
         keys[r, i] = b
         start[r, b] += 1
-    for b in range(1, buckets):  # inclusive prefix sums: the end of each bucket
-        start[r, b] += start[r, b - 1]
+    total = 0
+    for b in range(buckets):  # inclusive prefix sums (the end of each bucket), in a register
+        total += start[r, b]
+        start[r, b] = total
     start[r, buckets] = count
     for i in range(count - 1, -1, -1):  # backwards: each bucket ends up in ascending order
         b = keys[r, i]

@@ -100,14 +100,19 @@ def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
 
 
 @inlined
-def _bodies(r: int, w: World, k: Constants, x: Scratch) -> None:
-    """Each robot's rounded box and whether it can be pushed (``motion._bodies``)."""
-    for n in range(k.robots):
-        mode = w.mode[r, n]
-        loaded = is_loaded(mode, w.target[r, n])
-        x.extent[r, n] = k.carrier_half if loaded else 0.0
-        x.radius[r, n] = 0.0 if loaded else k.robot_radius
-        x.movable[r, n] = not (mode in (_CENTRE, _LIFT) or mode >= _RELEASE)
+def start_body(r: int, n: int, w: World, k: Constants, x: Scratch) -> None:
+    """Robot ``n``'s rounded box, whether it can be pushed (``motion._bodies``) and its start.
+
+    The collisions' start is the proposed position; robot ``n``'s mode,
+    target and proposal are final once it has moved.
+    """
+    mode = w.mode[r, n]
+    loaded = is_loaded(mode, w.target[r, n])
+    x.extent[r, n] = k.carrier_half if loaded else 0.0
+    x.radius[r, n] = 0.0 if loaded else k.robot_radius
+    x.movable[r, n] = not (mode in (_CENTRE, _LIFT) or mode >= _RELEASE)
+    x.x[r, n] = x.proposed[r, n, 0]
+    x.y[r, n] = x.proposed[r, n, 1]
 
 
 @inlined
@@ -441,31 +446,32 @@ def resolve_run(r: int, w: World, k: Constants, x: Scratch) -> None:
     would change nothing. With a grid (large swarms) a pass after the first
     computes only the robots near a robot the pass before moved.
     """
-    count = resolve_begin(r, True, w, k, x)
+    count = resolve_begin(r, False, w, k, x)
     collide_range(r, 0, count, True, w, k, x)
     resolve_finish(r, count, w, k, x)
 
 
 @inlined
-def resolve_begin(r: int, copy: bool, w: World, k: Constants, x: Scratch) -> int:
+def resolve_begin(r: int, split: bool, w: World, k: Constants, x: Scratch) -> int:
     """Bodies, the proposed positions as the first pass's start, its robots (all of them).
 
-    ``copy``: copy the robots to their grid slots here (else the caller does,
-    ``_index.copy_to_slots``, before the first pass).
+    ``split``: each robot's body and start were set as it moved (``start_body``
+    in ``_tick.tick_robots``), and the caller copies the robots to their grid
+    slots (``_index.copy_to_slots``) before the first pass.
     """
-    _bodies(r, w, k, x)
-    for n in range(k.robots):
-        x.x[r, n] = x.proposed[r, n, 0]
-        x.y[r, n] = x.proposed[r, n, 1]
-        x.active[r, n] = n
-    count = k.robots
+    if not split:
+        for n in range(k.robots):
+            start_body(r, n, w, k, x)
     if k.robot_grid:
-        grid_robots(r, k, x, copy)
+        grid_robots(r, k, x, not split)
         x.grid_epoch[r] += 1  # nobody displaced from this grid yet
         x.displaced_count[r] = 0
         for j in range(k.robots):  # bucket by bucket: neighbours' buckets stay in cache
             x.active[r, j] = x.robot_items[r, j]
-    return count
+    else:
+        for n in range(k.robots):
+            x.active[r, n] = n
+    return k.robots
 
 
 @inlined

@@ -184,7 +184,7 @@ def _first_pass(
 ) -> int:
     """Steps 3 and 4: the first collision pass; its robots, or -1 if a thread will not come."""
     if part == 0:
-        sync[SYNC_ACTIVE] = resolve_begin(r, False, w, k, x)
+        sync[SYNC_ACTIVE] = resolve_begin(r, True, w, k, x)
     if not _meet(parts, r, streams, sync, k, x):
         return -1
     if k.robot_grid:

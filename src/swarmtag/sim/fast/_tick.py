@@ -29,7 +29,7 @@ from swarmtag.sim.fast._events import flush_slots, room_for_tick
 from swarmtag.sim.fast._index import index_obstacles, index_robots
 from swarmtag.sim.fast._jit import entry, inlined, jit
 from swarmtag.sim.fast._layout import Constants, Scratch, World
-from swarmtag.sim.fast._motion import move_robots, resolve_run
+from swarmtag.sim.fast._motion import move_robots, resolve_run, start_body
 from swarmtag.sim.fast._orders import place_orders_run
 from swarmtag.sim.fast._sense import sense_robots, tags_advertising
 
@@ -115,12 +115,14 @@ def tick_robots(
     Each robot reads the run's state as the tick began and writes only its
     own entries (and its event slots), so ranges of robots may run at once
     on several threads, each with its own query buffers (``Scratch.near_*``).
+    Each also sets its body for the collisions (``resolve_begin(split=True)``).
     """
     for n in range(lo, hi):
         sense_robots(r, t, n, n + 1, w, k, x)
         break_down_robots(r, n, n + 1, w, k, x)
         decide_robots(r, t, n, n + 1, turns, row, w, k, x)
         move_robots(r, n, n + 1, w, k, x)
+        start_body(r, n, w, k, x)
 
 
 @inlined
