@@ -5,6 +5,7 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import fields, replace
 
+import numba
 import numpy as np
 import pytest
 
@@ -24,7 +25,15 @@ from swarmtag.sim import (
 )
 from swarmtag.sim.docking import STUCK_PROGRESS
 from swarmtag.sim.fast import _docking, _scene
-from swarmtag.sim.fast._layout import _KERNEL_ONLY, EVENT_SLOTS, World, constants_of
+from swarmtag.sim.fast._index import index_robots
+from swarmtag.sim.fast._layout import (
+    _KERNEL_ONLY,
+    EVENT_SLOTS,
+    Constants,
+    Scratch,
+    World,
+    constants_of,
+)
 from swarmtag.sim.runner import resolve_backend, seeded_state
 from swarmtag.sim.scene import _ATTEMPTS, _RESTARTS
 from tests.sim.fast.helpers import TAG_CACHES, assert_same
@@ -279,3 +288,37 @@ def test_a_warehouse_run_split_over_threads_gives_the_same_bytes(monkeypatch):
     assert splits
     assert (split.events.kind == "arrive").sum() > 0
     assert split.delivered.sum() > 0
+
+
+_INDEX = ("robot_start", "robot_items", "crowd_start", "crowd_items", "x", "y")
+"""The scratch arrays the robots' index writes (``_index.index_robots``)."""
+
+
+@numba.njit(cache=False)  # not cached: machine code cached here would keep old _index code
+def _index_robots_now(r: int, w: World, k: Constants, x: Scratch) -> None:
+    index_robots(r, w, k, x)
+
+
+def test_a_split_run_leaves_the_robots_index_of_where_they_stand(monkeypatch):
+    # thread 1 builds the next tick's robots' index at the end of a tick (after docking),
+    # and a paused run keeps it for its next call: it must be the index of the robots' places
+    _count_splits(monkeypatch)
+    stepped = fast_runner._Batch._split_run
+    compared: list[int] = []
+
+    def compare(self: fast_runner._Batch, r: int, *rest: object) -> None:
+        stepped(self, r, *rest)  # type: ignore[arg-type]
+        x = self.scratch
+        fresh = x._replace(**{name: getattr(x, name).copy() for name in _INDEX})
+        _index_robots_now(r, self.world, self.constants, fresh)
+        for name in _INDEX:
+            np.testing.assert_array_equal(getattr(x, name)[r], getattr(fresh, name)[r], name)
+        compared.append(r)
+
+    monkeypatch.setattr(fast_runner._Batch, "_split_run", compare)
+    scenario = _wide(150, 40, 300, **{"camera.occlusion": "carriers+robots"})
+    split = simulate(
+        scenario, Urgency(alpha=0.7), seed=3, runs=1, backend="fast", threads=2, record=True
+    )
+    assert len(compared) >= 300  # one call a tick: every tick's index compared
+    assert (split.events.kind == "select").sum() > 0  # robots chose carriers and went for them

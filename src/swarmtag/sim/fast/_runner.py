@@ -39,7 +39,13 @@ from swarmtag.sim.fast._layout import (
     world_of,
 )
 from swarmtag.sim.fast._pcg import STATE_WORDS, states_of
-from swarmtag.sim.fast._split import SYNC_DRAWN, split_sync, split_ticks, thread_scratch
+from swarmtag.sim.fast._split import (
+    SYNC_DRAWN,
+    SYNC_INDEXED,
+    split_sync,
+    split_ticks,
+    thread_scratch,
+)
 from swarmtag.sim.fast._sync import SYNC_ABORT
 from swarmtag.sim.fast._tag_cache import FAILURE_CACHE_FULL
 from swarmtag.sim.fast._tick import advance
@@ -228,6 +234,8 @@ class _Batch:
         self.thread_scratch = [self.scratch]
         self.drawn = np.full(runs, -1, dtype=np.int64)
         """Split runs: the tick whose random numbers the buffers hold (``_split_run``)."""
+        self.indexed = np.full(runs, -1, dtype=np.int64)
+        """Split runs: the tick whose robots' index the scratch holds (``_split_run``)."""
         if self.split:
             self.thread_scratch += [thread_scratch(self.scratch) for _ in range(threads - 1)]
         else:
@@ -261,12 +269,13 @@ class _Batch:
         Every thread runs ``split_ticks`` at once, this one part 0. If this
         thread cannot run its part (Ctrl-C before the call), the others are
         told (``SYNC_ABORT``) and return at their next barrier. ``self.drawn[r]``
-        is the tick whose random numbers the buffers hold, kept when the run pauses.
+        is the tick whose random numbers the buffers hold, ``self.indexed[r]`` the
+        tick whose robots' index the scratch holds, both kept when the run pauses.
         """
         assert self.pool is not None
         s = self.streams
         parts = len(self.thread_scratch)
-        sync = split_sync(int(self.drawn[r]))
+        sync = split_sync(int(self.drawn[r]), int(self.indexed[r]))
         calls = [
             (
                 part,
@@ -294,6 +303,7 @@ class _Batch:
             for future in futures:
                 future.result()
         self.drawn[r] = sync[SYNC_DRAWN]
+        self.indexed[r] = sync[SYNC_INDEXED]
 
     def advance_to(self, stop: int, turns: np.ndarray, first: int) -> None:
         """Every running run to tick ``stop`` (empties buffers a run filled on the way)."""

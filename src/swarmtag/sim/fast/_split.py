@@ -19,7 +19,7 @@ at once; each tick is
    arrivals and docking (``tick_settle``: the last moves of the tick);
 6. (thread 0) every later phase (``tick_finish``), while thread 1 builds
    the robots' index of the next tick (they stand where it starts), so
-   that step 1 of the next tick is short (the index of a call's first
+   that step 1 of the next tick is short (the index of a run's first
    tick is built in its step 1).
 
 The threads wait for each other between the steps at barriers, in compiled
@@ -61,7 +61,7 @@ from swarmtag.sim.fast._sync import (
 )
 from swarmtag.sim.fast._tick import tick_begin, tick_finish, tick_robots, tick_settle
 
-__all__ = ["SYNC_DRAWN", "split_sync", "split_ticks", "thread_scratch"]
+__all__ = ["SYNC_DRAWN", "SYNC_INDEXED", "split_sync", "split_ticks", "thread_scratch"]
 
 SYNC_GO: Final = SYNC_VALUES
 """1 while the run steps on (thread 0 decides before each tick)."""
@@ -69,6 +69,9 @@ SYNC_DRAWN: Final = SYNC_VALUES + 1
 """The tick whose random numbers the buffers hold, or are being drawn for (-1: none yet)."""
 SYNC_ACTIVE: Final = SYNC_VALUES + 2
 """Robots of the tick's first collision pass (step 3 to step 4)."""
+SYNC_INDEXED: Final = SYNC_VALUES + 3
+"""The tick whose robots' index is built (thread 1 builds it at the end of the tick before;
+-1: none). Kept between calls: nothing moves a robot between them."""
 SYNC_DRAW_AT: Final = SYNC_VALUES + SYNC_LINE
 """Units of ``SYNC_DRAWN``'s numbers drawn so far (``_draws``; all of them at or past
 ``draw_units``)."""
@@ -78,10 +81,14 @@ _ALL_DRAWN: Final = 1 << 62
 """``SYNC_DRAW_AT`` of a tick whose numbers are all in the buffers, whatever the units."""
 
 
-def split_sync(drawn: int) -> np.ndarray:
-    """A ``sync`` array for ``split_ticks``: the buffers hold all of tick ``drawn``'s numbers."""
+def split_sync(drawn: int, indexed: int) -> np.ndarray:
+    """A ``sync`` array for ``split_ticks``: the buffers hold all of tick ``drawn``'s numbers.
+
+    ``indexed``: the tick whose robots' index is built (``SYNC_INDEXED``).
+    """
     sync = sync_array()
     sync[SYNC_DRAWN] = drawn
+    sync[SYNC_INDEXED] = indexed
     sync[SYNC_DRAW_AT] = _ALL_DRAWN
     return sync
 
@@ -225,7 +232,6 @@ def split_ticks(
     """
     room = k.robots + k.pickup_slots.shape[0]
     lo, hi = _part(k.robots, part, parts)
-    indexed = False  # thread 1: the robots' index of the next tick built (at the last tick's end)
     while True:
         if part == 0:
             go = w.ended_at[r] < 0 and w.run_tick[r] < stop and x.failure[r] == 0
@@ -242,7 +248,7 @@ def split_ticks(
         row = t - first if k.walk_turn_ticks > 0 else 0
         if part == 0:
             tick_begin(r, t, parts == 1, w, k, x)  # one part: no thread 1 to index
-        elif part == 1 and not indexed:  # a call's first tick
+        elif part == 1 and sync[SYNC_INDEXED] != t:  # a run's first tick
             index_robots(r, w, k, x)
         drawn = _draw_rest(r, streams, sync, k, x)
         if not (drawn and barrier(sync, parts)):
@@ -264,7 +270,7 @@ def split_ticks(
                 return
             if part == 1:
                 index_robots(r, w, k, x)
-                indexed = True
+                sync[SYNC_INDEXED] = t + 1  # read by this thread, and the runner after the call
         if part == 0:
             tick_finish(r, t, w, k, x)
             w.run_tick[r] = t
