@@ -35,6 +35,10 @@ from swarmtag.sim.fast._sense import sense_robots, tags_advertising
 
 __all__ = ["advance", "tick_run"]
 
+ROBOT_BLOCK = 256
+"""Robots a split run's thread takes through each phase in turn (``tick_robots``; 64 to
+4,096 stepped 20,000 robots alike)."""
+
 
 @inlined
 def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
@@ -110,19 +114,24 @@ def tick_robots(
     k: Constants,
     x: Scratch,
 ) -> None:
-    """Sense, break down, decide and move robots ``lo .. hi - 1``, one robot after another.
+    """Sense, break down, decide and move robots ``lo .. hi - 1``, a block at a time.
 
     Each robot reads the run's state as the tick began and writes only its
     own entries (and its event slots), so ranges of robots may run at once
-    on several threads, each with its own query buffers (``Scratch.near_*``).
+    on several threads, each with its own query buffers (``Scratch.near_*``),
+    and a block of robots may go through each phase in turn (tight loops:
+    0.52 -> 0.42 ms a thread at 20,000 robots against one robot after another;
+    the blocks keep a million robots' entries in cache between the phases).
     Each also sets its body for the collisions (``resolve_begin(split=True)``).
     """
-    for n in range(lo, hi):
-        sense_robots(r, t, n, n + 1, w, k, x)
-        break_down_robots(r, n, n + 1, w, k, x)
-        decide_robots(r, t, n, n + 1, turns, row, w, k, x)
-        move_robots(r, n, n + 1, w, k, x)
-        start_body(r, n, w, k, x)
+    for block in range(lo, hi, ROBOT_BLOCK):
+        end = min(block + ROBOT_BLOCK, hi)
+        sense_robots(r, t, block, end, w, k, x)
+        break_down_robots(r, block, end, w, k, x)
+        decide_robots(r, t, block, end, turns, row, w, k, x)
+        move_robots(r, block, end, w, k, x)
+        for n in range(block, end):
+            start_body(r, n, w, k, x)
 
 
 @inlined
