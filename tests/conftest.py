@@ -1,8 +1,15 @@
-"""Shared test configuration: Hypothesis profiles, the opt-in ``--radio`` tests, a locked folder."""
+"""Shared test configuration: Hypothesis profiles, the opt-in ``--radio`` tests, a locked folder.
+
+Before any test, the fast kernel's two entry points are compiled (or loaded)
+at once in two processes (``tests/kernel_warmup.py``).
+"""
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -30,6 +37,35 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     )
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """Have the fast kernel's machine code cached before the tests (or their workers) start.
+
+    Its first compilation takes minutes on one core. Done here, the two
+    entry points compile side by side; without it, each test worker (and
+    each command-line test's own process) would compile the kernel again
+    while the first was still at it, and the command-line tests would see
+    the first-compilation note on stderr. Once cached, this loads it in
+    a few seconds. An xdist worker skips it: its controller has done it.
+    """
+    if hasattr(config, "workerinput") or importlib.util.find_spec("numba") is None:
+        return
+    root = Path(__file__).resolve().parent.parent
+    processes = [
+        subprocess.Popen(
+            [sys.executable, "-m", "tests.kernel_warmup", entry],
+            cwd=root,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
+        for entry in ("batched", "split")
+    ]
+    outputs = [process.communicate()[0] for process in processes]
+    failed = [out for out, process in zip(outputs, processes, strict=True) if process.returncode]
+    if failed:
+        raise pytest.UsageError("compiling the fast kernel failed:\n" + "\n".join(failed))
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     if config.getoption("--radio"):
         return
@@ -48,3 +84,17 @@ def unwritable_dir(tmp_path: Path) -> Path:
     folder.mkdir()
     folder.chmod(0o555)
     return folder
+
+
+@pytest.fixture
+def no_resent_interrupt(monkeypatch: pytest.MonkeyPatch) -> None:
+    """For a test that sends itself SIGINT: the watchdog it starts sends none again.
+
+    ``_interrupt``'s watchdog re-sends an interrupt nobody acknowledged every
+    ``RESEND_S``; on a loaded machine (one pytest worker per core) that 0.2 s
+    can pass before the test's ``restore()``, and a re-sent SIGINT would then
+    end the test process. The re-sending is tested in subprocesses.
+    """
+    from swarmtag import _interrupt
+
+    monkeypatch.setattr(_interrupt, "RESEND_S", 3600.0)

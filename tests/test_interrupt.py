@@ -22,6 +22,7 @@ def test_checkpoint_does_nothing_until_an_interrupt_arrives():
         restore()
 
 
+@pytest.mark.usefixtures("no_resent_interrupt")
 def test_a_swallowed_interrupt_is_raised_again_at_the_next_checkpoint():
     restore = _interrupt.install()
     try:
@@ -34,6 +35,19 @@ def test_a_swallowed_interrupt_is_raised_again_at_the_next_checkpoint():
     finally:
         restore()
     assert signal.getsignal(signal.SIGINT) is not _interrupt._handler
+
+
+@pytest.mark.usefixtures("no_resent_interrupt")
+def test_after_restore_a_past_interrupt_is_not_raised_at_checkpoints():
+    # library use after an in-process command that a Ctrl-C ended: nothing is pending
+    restore = _interrupt.install()
+    try:
+        with contextlib.suppress(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGINT)
+    finally:
+        restore()
+    assert not _interrupt.interrupted()
+    _interrupt.checkpoint()
 
 
 def test_install_resets_the_flag_and_restore_puts_back_the_old_handler():

@@ -195,6 +195,7 @@ def test_a_staging_folder_whose_removal_never_ran_goes_at_exit(tmp_path):
     assert names(tmp_path) == []
 
 
+@pytest.mark.usefixtures("no_resent_interrupt")
 def test_outputs_computed_after_a_swallowed_interrupt_are_not_kept(tmp_path):
     from swarmtag import _interrupt
 

@@ -122,6 +122,9 @@ def install() -> Callable[[], None]:
 
     def restore() -> None:
         _state["acknowledged"] = True  # first: the watchdog must not send to the old handler
+        # The interrupt ended with what was installed: a library call after, say, an
+        # in-process ``main()`` that a Ctrl-C ended must not meet it at its checkpoints.
+        _state["pending"] = False
         _main.pop("thread", None)
         signal.signal(signal.SIGINT, previous)
         sys.unraisablehook = previous_unraisable

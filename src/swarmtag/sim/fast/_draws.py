@@ -69,49 +69,96 @@ def chunk_end(unit: int, numbers: int, k: Constants) -> int:
 
 
 @inlined
-def draw_range(
-    r: int, first: int, stop: int, streams: np.ndarray, k: Constants, x: Scratch
-) -> None:
-    """Units ``first .. stop - 1`` of run ``r``'s tick: read only by the robots' phases.
+def _settings(k: Constants) -> tuple[int, int, float, float, float]:
+    """What the draws need of the constants: robots, carriers, the three realism rates."""
+    return k.robots, k.carriers, k.breakdown, k.advertisement_loss, k.detection_noise
 
-    ``streams[r]``: the run's generators (``_pcg``), one row per stream in
-    ``STREAMS``' order, advanced in place; each stream's state stays in
-    registers while its units draw.
+
+@inlined
+def _buffers(
+    r: int, x: Scratch
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Run ``r``'s buffers of a tick's numbers: walk, sidestep, break-down, radio, camera."""
+    return x.walk_in[r], x.sidestep_in[r], x.breakdown_draw[r], x.radio_draw[r], x.noise[r]
+
+
+@inlined
+def _draw_numbers(
+    first: int,
+    stop: int,
+    state: np.ndarray,
+    settings: tuple[int, int, float, float, float],
+    buffers: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """Units ``first .. stop - 1`` of a run's tick from its generators ``state`` into ``buffers``.
+
+    ``state``: one row per stream in ``STREAMS``' order, advanced in place;
+    each stream's state stays in registers while its units draw.
     """
-    robots = k.robots
-    state = streams[r]
+    robots, carriers, breakdown, advertisement_loss, detection_noise = settings
+    walk, sidestep, breakdowns, radio, noise = buffers
     high, low, inc_high, inc_low = state[0, 0], state[0, 1], state[0, 2], state[0, 3]
     for n in range(max(first, 0), min(stop, robots)):
         g0, high, low = standard_normal(high, low, inc_high, inc_low)
         g1, high, low = standard_normal(high, low, inc_high, inc_low)
         g2, high, low = standard_normal(high, low, inc_high, inc_low)
         g3, high, low = standard_normal(high, low, inc_high, inc_low)
-        x.walk_in[r, n, 0], x.walk_in[r, n, 1] = _unit(g0, g1)
-        x.sidestep_in[r, n, 0], x.sidestep_in[r, n, 1] = _unit(g2, g3)
+        walk[n, 0], walk[n, 1] = _unit(g0, g1)
+        sidestep[n, 0], sidestep[n, 1] = _unit(g2, g3)
     state[0, 0], state[0, 1] = high, low
-    if k.breakdown > 0:
+    if breakdown > 0:
         high, low, inc_high, inc_low = state[1, 0], state[1, 1], state[1, 2], state[1, 3]
         for n in range(max(first, robots) - robots, min(stop, 2 * robots) - robots):
-            x.breakdown_draw[r, n], high, low = uniform(high, low, inc_high, inc_low)
+            breakdowns[n], high, low = uniform(high, low, inc_high, inc_low)
         state[1, 0], state[1, 1] = high, low
-    if k.advertisement_loss > 0:
+    if advertisement_loss > 0:
         high, low, inc_high, inc_low = state[2, 0], state[2, 1], state[2, 2], state[2, 3]
         for n in range(max(first, 2 * robots) - 2 * robots, min(stop, 3 * robots) - 2 * robots):
-            for c in range(k.carriers):
-                x.radio_draw[r, n, c], high, low = uniform(high, low, inc_high, inc_low)
+            for c in range(carriers):
+                radio[n, c], high, low = uniform(high, low, inc_high, inc_low)
         state[2, 0], state[2, 1] = high, low
-    if k.detection_noise > 0:
+    if detection_noise > 0:
         high, low, inc_high, inc_low = state[3, 0], state[3, 1], state[3, 2], state[3, 3]
         for n in range(max(first, 3 * robots) - 3 * robots, min(stop, 4 * robots) - 3 * robots):
-            for c in range(k.carriers):
+            for c in range(carriers):
                 g0, high, low = standard_normal(high, low, inc_high, inc_low)
                 g1, high, low = standard_normal(high, low, inc_high, inc_low)
-                x.noise[r, n, c, 0] = g0 * k.detection_noise
-                x.noise[r, n, c, 1] = g1 * k.detection_noise
+                noise[n, c, 0] = g0 * detection_noise
+                noise[n, c, 1] = g1 * detection_noise
         state[3, 0], state[3, 1] = high, low
+
+
+@jit
+def _draw_numbers_called(
+    first: int,
+    stop: int,
+    state: np.ndarray,
+    settings: tuple[int, int, float, float, float],
+    buffers: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """``_draw_numbers`` compiled once, as a call: see ``draw_range``."""
+    _draw_numbers(first, stop, state, settings, buffers)
+
+
+@inlined
+def draw_range(
+    r: int, first: int, stop: int, streams: np.ndarray, k: Constants, x: Scratch
+) -> None:
+    """Units ``first .. stop - 1`` of run ``r``'s tick: read only by the robots' phases.
+
+    ``streams[r]``: the run's generators (``_pcg``), one row per stream in
+    ``STREAMS``' order, advanced in place. A call (its arrays, not the
+    state's tuples): a split run draws from several places in its
+    kernel, and one compiled copy keeps that kernel's compilation short;
+    a chunk's numbers take far longer than the call.
+    """
+    _draw_numbers_called(first, stop, streams[r], _settings(k), _buffers(r, x))
 
 
 @inlined
 def draw(r: int, streams: np.ndarray, k: Constants, x: Scratch) -> None:
-    """Every number of run ``r``'s tick, in the order ``RandomSource`` draws them."""
-    draw_range(r, 0, draw_units(k), streams, k, x)
+    """Every number of run ``r``'s tick, in the order ``RandomSource`` draws them.
+
+    Inlined: a batch draws once a tick for each of its (often small) runs.
+    """
+    _draw_numbers(0, draw_units(k), streams[r], _settings(k), _buffers(r, x))

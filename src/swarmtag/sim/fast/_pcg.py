@@ -39,7 +39,7 @@ from numba.np.random._constants import (
     ziggurat_nor_r,
 )
 
-from swarmtag.sim.fast._jit import inlined
+from swarmtag.sim.fast._jit import inlined, jit
 
 __all__ = ["STATE_WORDS", "next_uint64", "standard_normal", "states_of", "uniform"]
 
@@ -122,6 +122,37 @@ def uniform(
     return float(bits >> np.uint64(11)) * _TO_UNIT, high, low
 
 
+@jit
+def _beyond_the_layers(
+    layer: np.int64,
+    magnitude: np.int64,
+    x: float,
+    high: np.uint64,
+    low: np.uint64,
+    inc_high: np.uint64,
+    inc_low: np.uint64,
+) -> tuple[float, bool, np.uint64, np.uint64]:
+    """The ziggurat's rare cases (0.7 % of draws): (number, accepted, new state high, low).
+
+    The tail beyond r (layer 0) always gives a number; a wedge may reject
+    ``x`` (then the caller draws again). A call rather than inlined: the
+    kernels inline ``standard_normal`` at many places, and this part, with
+    its logarithms and loop, is most of its code.
+    """
+    if layer == 0:  # the tail beyond r
+        while True:
+            first, high, low = uniform(high, low, inc_high, inc_low)
+            second, high, low = uniform(high, low, inc_high, inc_low)
+            xx = -_INV_R * math.log1p(-first)
+            yy = -math.log1p(-second)
+            if yy + yy > xx * xx:
+                tail = _R + xx
+                return (-tail if (magnitude >> 8) & 1 else tail), True, high, low
+    height, high, low = uniform(high, low, inc_high, inc_low)
+    accepted = (_FI[layer - 1] - _FI[layer]) * height + _FI[layer] < math.exp(-0.5 * x * x)
+    return x, accepted, high, low
+
+
 @inlined
 def standard_normal(
     high: np.uint64, low: np.uint64, inc_high: np.uint64, inc_low: np.uint64
@@ -135,16 +166,8 @@ def standard_normal(
         x = float(magnitude) * _WI[layer] * sign  # times +-1: exact, and no branch to mispredict
         if magnitude < _KI[layer]:
             return x, high, low  # 99.3 % of the numbers
-        if layer == 0:  # the tail beyond r
-            while True:
-                first, high, low = uniform(high, low, inc_high, inc_low)
-                second, high, low = uniform(high, low, inc_high, inc_low)
-                xx = -_INV_R * math.log1p(-first)
-                yy = -math.log1p(-second)
-                if yy + yy > xx * xx:
-                    tail = _R + xx
-                    return (-tail if (magnitude >> 8) & 1 else tail), high, low
-        else:
-            height, high, low = uniform(high, low, inc_high, inc_low)
-            if (_FI[layer - 1] - _FI[layer]) * height + _FI[layer] < math.exp(-0.5 * x * x):
-                return x, high, low
+        number, accepted, high, low = _beyond_the_layers(
+            layer, magnitude, x, high, low, inc_high, inc_low
+        )
+        if accepted:
+            return number, high, low
