@@ -35,9 +35,9 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy
 
-# One pytest worker per core (at most 8); tests/conftest.py compiles the fast kernel first.
+# One pytest worker per logical core (at most 8; psutil may count two vCPUs as one physical core); tests/conftest.py compiles the fast kernel first.
 unit: $(STAMP)
-	$(BIN)/pytest --numprocesses auto --maxprocesses 8 --dist worksteal
+	$(BIN)/pytest --numprocesses logical --maxprocesses 8 --dist worksteal
 
 test: lint typecheck unit
 
