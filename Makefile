@@ -35,9 +35,11 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy
 
-# One pytest worker per logical core (at most 8; psutil may count two vCPUs as one physical core); tests/conftest.py compiles the fast kernel first.
+# One pytest worker per logical core (at most 8; psutil may count two vCPUs as one physical core);
+# tests/conftest.py compiles the fast kernel first. Tests that bound seconds run alone after.
 unit: $(STAMP)
-	$(BIN)/pytest --numprocesses logical --maxprocesses 8 --dist worksteal
+	$(BIN)/pytest --numprocesses logical --maxprocesses 8 --dist worksteal -m "not serial"
+	$(BIN)/pytest -m serial
 
 test: lint typecheck unit
 

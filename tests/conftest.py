@@ -15,6 +15,8 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, settings
 
+from tests.kernel_warmup import ENTRIES
+
 # CI machines are small and shared: no per-example deadline, and a fixed
 # number of examples so the suite's length is predictable.
 settings.register_profile(
@@ -58,7 +60,7 @@ def pytest_configure(config: pytest.Config) -> None:
             stderr=subprocess.STDOUT,
             text=True,
         )
-        for entry in ("batched", "split")
+        for entry in ENTRIES
     ]
     outputs = [process.communicate()[0] for process in processes]
     failed = [out for out, process in zip(outputs, processes, strict=True) if process.returncode]

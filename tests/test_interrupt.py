@@ -12,6 +12,8 @@ import pytest
 
 from swarmtag import _interrupt
 
+pytestmark = pytest.mark.serial  # re-sends within 2 RESEND_S: not beside other tests' load
+
 
 def test_checkpoint_does_nothing_until_an_interrupt_arrives():
     restore = _interrupt.install()

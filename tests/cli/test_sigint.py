@@ -51,7 +51,10 @@ from swarmtag.experiments import ResultsStore
 from tests.calibration.helpers import SMALL_TARGETS
 from tests.experiments.helpers import SMALL_TOML
 
-pytestmark = pytest.mark.skipif(not hasattr(os, "killpg"), reason="POSIX signals")
+pytestmark = [
+    pytest.mark.skipif(not hasattr(os, "killpg"), reason="POSIX signals"),
+    pytest.mark.serial,  # exits within LIMIT_S: not beside other tests' load
+]
 
 SEED = int(os.environ.get("SWARMTAG_SIGINT_SEED") or random.SystemRandom().randrange(2**32))
 COUNT = int(os.environ.get("SWARMTAG_SIGINTS") or 5)
