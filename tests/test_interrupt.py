@@ -191,3 +191,42 @@ def test_an_interrupt_printed_as_a_traceback_by_a_c_extension_is_kept_quiet():
     assert done.stdout.strip() == "carried on"
     assert "KeyboardInterrupt" not in done.stderr
     assert "ValueError: not ours" in done.stderr  # other errors are printed as before
+
+
+_BOOKKEEPING_SCRIPT = """
+import os, signal, time
+from swarmtag import _interrupt
+
+restore = _interrupt.install()
+steps = []
+# llvmlite's link_modules: a native call that frees a module, then the wrapper's detach().
+linker = {"__name__": "llvmlite.binding.linker", "os": os, "signal": signal, "steps": steps}
+exec(
+    "def link_modules():\\n"
+    "    os.kill(os.getpid(), signal.SIGINT)  # arrives right after the native call\\n"
+    "    steps.append('detached')\\n",
+    linker,
+)
+try:
+    linker["link_modules"]()
+    steps.append("returned")
+    time.sleep(5)
+    steps.append("never interrupted")
+except KeyboardInterrupt:
+    steps.append("raised")
+print(" ".join(steps), flush=True)
+"""
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="POSIX signals")
+def test_an_interrupt_inside_llvmlite_s_bookkeeping_is_raised_after_it():
+    # Raised between LLVM freeing a module and its wrapper's detach(), the wrapper's
+    # finalizer freed it again at exit: a segfault after "aborted". The watchdog re-sends.
+    done = subprocess.run(
+        [sys.executable, "-c", _BOOKKEEPING_SCRIPT],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=30,
+    )
+    assert done.stdout.split() == ["detached", "returned", "raised"], done.stdout + done.stderr

@@ -40,8 +40,18 @@ _state = {"pending": False, "acknowledged": False, "watching": False}
 _main: dict[str, int] = {}
 
 
-def _handler(_signum: int, _frame: FrameType | None) -> None:
+_NATIVE_BOOKKEEPING = ("llvmlite.",)
+"""Modules whose code hands native objects over: never interrupted mid-way (see ``_handler``)."""
+
+
+def _handler(_signum: int, frame: FrameType | None) -> None:
     _flag()
+    if frame is not None and frame.f_globals.get("__name__", "").startswith(_NATIVE_BOOKKEEPING):
+        # llvmlite (numba's compiler) records after each native call who owns the LLVM
+        # object: interrupted in between (a module linked into another, freed by LLVM,
+        # but not yet detached), its finalizer frees it again and the process segfaults
+        # at exit. Flagged only: the watchdog re-sends it RESEND_S later, out of there.
+        return
     raise KeyboardInterrupt
 
 

@@ -522,6 +522,44 @@ def test_a_ctrl_c_while_a_worker_starts_waits_for_it_and_stop_still_ends_it(monk
     assert not [p for p in multiprocessing.active_children() if isinstance(p, _Worker)]
 
 
+def test_an_interrupted_command_ends_without_finalizing_what_it_loaded():
+    """After a Ctrl-C the console script's process ends with 130 without the teardown.
+
+    An interrupt can leave a native library's object half handed over (llvmlite:
+    a module LLVM freed, its wrapper not yet told); its finalizer at the
+    interpreter's shutdown then crashed the process (exit -11 after ``aborted``).
+    The object here crashes when it is finalized, with the frames that the
+    interrupt unwound (as llvmlite's was); atexit handlers still run.
+    """
+    code = (
+        "import atexit, ctypes, os, signal, sys, threading\n"
+        "class FreedTwice:\n"
+        "    def __del__(self):\n"
+        "        ctypes.string_at(0)\n"
+        "atexit.register(lambda: print('atexit ran', flush=True))\n"
+        "from swarmtag.cli import _main, main\n"
+        "command = _main.run\n"
+        "def run(argv):\n"
+        "    held = FreedTwice()  # freed with the frames the interrupt unwinds, at exit\n"
+        "    command(argv)\n"
+        "_main.run = run\n"
+        "sys.argv = ['swarmtag', *sys.argv[1:]]\n"
+        "threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT)).start()\n"
+        "main()\n"
+    )
+    long_run = ["simulate", "--backend", "reference", "--runs", "64", "--ticks", "100000"]
+    done = subprocess.run(
+        [sys.executable, "-c", code, *long_run, "--no-progress"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 130, done.stderr
+    assert done.stderr.splitlines()[-1] == "swarmtag: error: aborted", done.stderr
+    assert done.stdout.splitlines()[-1] == "atexit ran", done.stdout
+
+
 def test_the_console_script_skips_the_last_collections_at_exit():
     """The objects loaded by a command are frozen out of the interpreter's final collections.
 

@@ -20,7 +20,11 @@ __all__ = ["main"]
 
 def main(argv: Sequence[str] | None = None) -> None:
     """Run the command line (see ``swarmtag --help``); exits with 0, 2 or 130."""
-    from swarmtag._interrupt import acknowledge, install  # noqa: PLC0415 - before the imports
+    from swarmtag._interrupt import (  # noqa: PLC0415 - before the imports
+        acknowledge,
+        install,
+        interrupted,
+    )
 
     restore = install()
     try:
@@ -31,6 +35,10 @@ def main(argv: Sequence[str] | None = None) -> None:
             print("swarmtag: error: aborted", file=sys.stderr)
             sys.exit(130)
         run(argv)
+    except SystemExit as ending:
+        if argv is None and interrupted():
+            _end_interrupted(ending.code)
+        raise
     finally:
         if argv is None:
             # This process is the command and ends with it: a Ctrl-C from here on (exit
@@ -46,3 +54,30 @@ def main(argv: Sequence[str] | None = None) -> None:
             gc.freeze()
         else:
             restore()
+
+
+def _end_interrupted(code: object) -> None:
+    """End an interrupted command's process with ``code`` now, its objects never finalized.
+
+    A Ctrl-C can land between a native library's call and the Python bookkeeping
+    after it: inside numba's compiler, llvmlite links a module into another (LLVM
+    frees it) but the interrupt comes before its wrapper is told, and the
+    wrapper's finalizer at the interpreter's shutdown frees it again (a segfault,
+    exit -11, after the ``aborted`` line). The command's own clean-up has run by
+    now (``finally`` blocks, outputs removed, stores closed); the atexit handlers
+    still run (multiprocessing's), then the process ends without the teardown.
+    """
+    import atexit  # noqa: PLC0415 - built in
+    import contextlib  # noqa: PLC0415 - loaded already
+    import os  # noqa: PLC0415 - loaded already
+    import signal  # noqa: PLC0415 - loaded already, by install()
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the status is decided: keep it
+    status = code if isinstance(code, int) else (0 if code is None else 1)
+    if code is not None and not isinstance(code, int):
+        print(code, file=sys.stderr)  # as the interpreter prints a message given to exit()
+    atexit._run_exitfuncs()  # private, but the only way to run them without the teardown
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):  # closed, or a pipe with no reader
+            stream.flush()
+    os._exit(status)
