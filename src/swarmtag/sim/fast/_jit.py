@@ -13,8 +13,8 @@ Two measured costs shape the rest:
   take the state as tuples of about a hundred arrays and allocate nothing;
   with it on, every call of a function with more than one branch increfs and
   decrefs every array of every tuple (atomic operations: about 260 ns a call
-  against 0.2 ns without). Only ``counted`` entry points, which pick each
-  run's generators out of typed lists, keep it.
+  against 0.2 ns without). Only ``counted`` entry points, which allocate
+  (the scene sampler's grids), keep it.
 - a call that is not inlined copies every array descriptor of those tuples
   (about 7 KB): the kernel ran 3 times slower with its phases as real calls.
   So every function that takes the state is ``inlined`` (LLVM's
@@ -137,7 +137,7 @@ def inlined(function: _F) -> _F:
 
 
 def counted(function: _F) -> _F:
-    """An entry point with numba's reference counting on (typed lists, array views)."""
+    """An entry point with numba's reference counting on (it allocates arrays, takes views)."""
     return _compiled(function, _OPTIONS, python_calls=True)
 
 
