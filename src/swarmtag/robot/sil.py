@@ -81,16 +81,13 @@ class TreeController:
         if not self._trees:
             self._connect(context)
         before, s = context.before, context.s
-        runs, robots = s.mode.shape
-        for row in range(runs):
-            if before.ended_at[row] >= 0:
-                continue
-            for robot in range(robots):
-                if s.mode[row, robot] == Mode.BROKEN:
-                    continue
-                self._views[row, robot].context = context
-                # the root alone: the tree's own tick adds visitors and handlers, unused here
-                self._trees[row, robot].root.tick_once()
+        # The working robots found once a tick: Mode.BROKEN looked up for every robot (the
+        # enum class's __getattr__ on Python 3.11) was 9 % of the Python calls of a tick.
+        rows, robots = np.nonzero((before.ended_at < 0)[:, None] & (s.mode != Mode.BROKEN))
+        for row, robot in zip(rows.tolist(), robots.tolist(), strict=True):  # row by row
+            self._views[row, robot].context = context
+            # the root alone: the tree's own tick adds visitors and handlers, unused here
+            self._trees[row, robot].root.tick_once()
 
     def _report(self, context: StepContext, events: TickEvents) -> None:
         """The reported decisions as the step's events, one entry per kind."""
