@@ -15,6 +15,13 @@ from swarmtag import _interrupt
 pytestmark = pytest.mark.serial  # re-sends within 2 RESEND_S: not beside other tests' load
 
 
+def _run_script(script: str) -> subprocess.CompletedProcess[str]:
+    """Run ``script`` in a fresh interpreter (its own handler and watchdog); its output."""
+    return subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=30
+    )
+
+
 def test_checkpoint_does_nothing_until_an_interrupt_arrives():
     restore = _interrupt.install()
     try:
@@ -89,9 +96,7 @@ Other()  # other errors in finalizers are still reported as usual
 
 
 def test_an_interrupt_inside_a_finalizer_is_kept_quietly_for_the_checkpoint():
-    done = subprocess.run(
-        [sys.executable, "-c", _FINALIZER_SCRIPT], capture_output=True, text=True, check=True
-    )
+    done = _run_script(_FINALIZER_SCRIPT)
     assert done.stdout.splitlines() == ["carried on True", "raised at the checkpoint"]
     assert "KeyboardInterrupt" not in done.stderr  # nothing printed for our interrupt
     assert "ValueError: not ours" in done.stderr  # the previous hook still reports the rest
@@ -123,9 +128,7 @@ except KeyboardInterrupt:
 )
 def test_a_lost_interrupt_is_sent_again_by_the_watchdog_even_into_a_blocking_call(wait):
     script = _LOST_SCRIPT.format(wait=wait)
-    done = subprocess.run(
-        [sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=30
-    )
+    done = _run_script(script)
     word, again, seconds = done.stdout.split()
     assert (word, again) == ("raised", "again"), done.stdout
     assert float(seconds) <= 2 * _interrupt.RESEND_S + 0.2
@@ -155,13 +158,7 @@ print(" / ".join(events), flush=True)
 
 @pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="POSIX signals")
 def test_the_watchdog_leaves_an_interrupt_being_handled_or_taken_alone():
-    done = subprocess.run(
-        [sys.executable, "-c", _HANDLING_SCRIPT],
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=30,
-    )
+    done = _run_script(_HANDLING_SCRIPT)
     assert done.stdout.strip() == "cleaned up / quiet after"
 
 
@@ -185,9 +182,7 @@ ctypes.pythonapi.PyRun_SimpleString(b"raise ValueError('not ours')")
 
 
 def test_an_interrupt_printed_as_a_traceback_by_a_c_extension_is_kept_quiet():
-    done = subprocess.run(
-        [sys.executable, "-c", _CYTHON_SCRIPT], capture_output=True, text=True, check=True
-    )
+    done = _run_script(_CYTHON_SCRIPT)
     assert done.stdout.strip() == "carried on"
     assert "KeyboardInterrupt" not in done.stderr
     assert "ValueError: not ours" in done.stderr  # other errors are printed as before
@@ -218,15 +213,11 @@ print(" ".join(steps), flush=True)
 """
 
 
-@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="POSIX signals")
+@pytest.mark.skipif(
+    not hasattr(signal, "pthread_kill"), reason="the watchdog's re-send needs pthread_kill (POSIX)"
+)
 def test_an_interrupt_inside_llvmlite_s_bookkeeping_is_raised_after_it():
     # Raised between LLVM freeing a module and its wrapper's detach(), the wrapper's
     # finalizer freed it again at exit: a segfault after "aborted". The watchdog re-sends.
-    done = subprocess.run(
-        [sys.executable, "-c", _BOOKKEEPING_SCRIPT],
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=30,
-    )
+    done = _run_script(_BOOKKEEPING_SCRIPT)
     assert done.stdout.split() == ["detached", "returned", "raised"], done.stdout + done.stderr
