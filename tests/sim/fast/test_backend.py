@@ -26,14 +26,8 @@ from swarmtag.sim import (
 from swarmtag.sim.docking import STUCK_PROGRESS
 from swarmtag.sim.fast import _docking, _scene
 from swarmtag.sim.fast._index import index_robots
-from swarmtag.sim.fast._layout import (
-    _KERNEL_ONLY,
-    EVENT_SLOTS,
-    Constants,
-    Scratch,
-    World,
-    constants_of,
-)
+from swarmtag.sim.fast._layout import _KERNEL_ONLY, Constants, World, constants_of
+from swarmtag.sim.fast._scratch import EVENT_SLOTS, Scratch
 from swarmtag.sim.runner import resolve_backend, seeded_state
 from swarmtag.sim.scene import _ATTEMPTS, _RESTARTS
 from tests.sim.fast.helpers import TAG_CACHES, assert_same

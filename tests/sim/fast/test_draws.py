@@ -11,8 +11,10 @@ import pytest
 from swarmtag.policy import Urgency
 from swarmtag.sim import Realism, Scenario
 from swarmtag.sim.fast._draws import STREAMS, chunk_end, draw, draw_range, draw_units
-from swarmtag.sim.fast._layout import Constants, Scratch, constants_of, scratch_for
+from swarmtag.sim.fast._geometry import unit_vector
+from swarmtag.sim.fast._layout import Constants, constants_of
 from swarmtag.sim.fast._pcg import states_of
+from swarmtag.sim.fast._scratch import Scratch, scratch_for
 from swarmtag.sim.params import make_params
 from swarmtag.sim.randomness import stream, unit_vectors
 
@@ -41,7 +43,7 @@ def _states(seed: int) -> np.ndarray:
     return states_of([stream(seed, 0, purpose) for purpose in STREAMS])[None]
 
 
-DRAWN = ("walk_in", "sidestep_in", "breakdown_draw", "radio_draw", "noise")
+DRAWN = ("walk_gaussians", "sidestep_gaussians", "breakdown_draw", "radio_draw", "noise")
 
 
 @pytest.mark.parametrize("numbers", [1, 7, 512, 10_000])
@@ -59,7 +61,7 @@ def test_chunks_draw_the_numbers_of_one_draw(numbers, realism):
     chunks = _draw_in_chunks(states[1], numbers, k, chunked)
     for name in DRAWN:
         np.testing.assert_array_equal(getattr(whole, name), getattr(chunked, name), err_msg=name)
-    assert np.abs(whole.walk_in).sum() > 0  # the buffers were written
+    assert np.abs(whole.walk_gaussians).sum() > 0  # the buffers were written
     if realism:
         assert np.abs(whole.noise).sum() > 0
         assert whole.radio_draw.sum() > 0
@@ -83,9 +85,25 @@ def test_a_tick_draws_the_reference_streams_numbers():
     n, c = params.robots, params.carriers
     motion, breakdown, radio, camera = (stream(5, 0, purpose) for purpose in STREAMS)
     gaussians = motion.standard_normal((3, n, 4))[2]
-    np.testing.assert_array_equal(x.walk_in[0], unit_vectors(gaussians[:, :2]))
-    np.testing.assert_array_equal(x.sidestep_in[0], unit_vectors(gaussians[:, 2:]))
+    np.testing.assert_array_equal(x.walk_gaussians[0], gaussians[:, :2])
+    np.testing.assert_array_equal(x.sidestep_gaussians[0], gaussians[:, 2:])
     np.testing.assert_array_equal(x.breakdown_draw[0], breakdown.random((3, n))[2])
     np.testing.assert_array_equal(x.radio_draw[0], radio.random((3, n, c))[2])
     noise = camera.standard_normal((3, n, c, 2))[2] * params.detection_noise
     np.testing.assert_array_equal(x.noise[0], noise)
+
+
+@numba.njit(cache=False)  # not cached: machine code cached here would keep old geometry code
+def _unit_vectors(pairs: np.ndarray) -> np.ndarray:
+    out = np.empty_like(pairs)
+    for i in range(pairs.shape[0]):
+        out[i, 0], out[i, 1] = unit_vector(pairs[i, 0], pairs[i, 1])
+    return out
+
+
+def test_a_pair_of_gaussian_numbers_becomes_the_reference_s_unit_vector():
+    pairs = np.random.default_rng(3).standard_normal((500, 2))
+    pairs[:3] = [[0.0, 0.0], [-0.0, 2.5], [1e-300, -1e-300]]  # no direction; an axis; underflow
+    compiled = _unit_vectors(pairs)
+    np.testing.assert_array_equal(compiled, unit_vectors(pairs))
+    assert compiled[0].tolist() == [1.0, 0.0]

@@ -15,10 +15,11 @@ import numpy as np
 
 from swarmtag.policy._kernel import kernel_score
 from swarmtag.sim.fast._events import emit
-from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, away_from, norm
+from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, away_from, norm, unit_vector
 from swarmtag.sim.fast._grid import near
 from swarmtag.sim.fast._jit import inlined, jit
-from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._layout import Constants, World
+from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._tag_cache import block, known_blocked_until, known_status, known_urgency
 
 __all__ = ["break_down_robots", "decide_robots", "is_loaded", "to_walk"]
@@ -225,7 +226,8 @@ def _directions(
     walking = w.mode[r, n] == _WALK
     fresh = walking and (w.redirect[r, n] or push_x != 0 or push_y != 0)
     if fresh:
-        wx, wy = away_from(x.walk_in[r, n, 0], x.walk_in[r, n, 1], push_x, push_y)
+        wx, wy = unit_vector(x.walk_gaussians[r, n, 0], x.walk_gaussians[r, n, 1])
+        wx, wy = away_from(wx, wy, push_x, push_y)
         w.walk[r, n, 0] = wx
         w.walk[r, n, 1] = wy
         w.redirect[r, n] = False
@@ -246,7 +248,8 @@ def _directions(
         if fresh:
             w.walk_clock[r, n] = 0
     if w.mode[r, n] == _TRANSPORT and w.stuck[r, n] >= k.stuck_ticks and w.sidestep[r, n] == 0:
-        sx, sy = away_from(x.sidestep_in[r, n, 0], x.sidestep_in[r, n, 1], push_x, push_y)
+        sx, sy = unit_vector(x.sidestep_gaussians[r, n, 0], x.sidestep_gaussians[r, n, 1])
+        sx, sy = away_from(sx, sy, push_x, push_y)
         w.sidestep_dir[r, n, 0] = sx
         w.sidestep_dir[r, n, 1] = sy
         w.sidestep[r, n] = k.sidestep_ticks

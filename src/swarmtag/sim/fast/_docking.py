@@ -16,7 +16,8 @@ from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, contact, maximum, minimu
 from swarmtag.sim.fast._grid import near
 from swarmtag.sim.fast._index import index_obstacles
 from swarmtag.sim.fast._jit import inlined
-from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._layout import Constants, World
+from swarmtag.sim.fast._scratch import Scratch
 
 __all__ = [
     "FAILURE_LOWERED",

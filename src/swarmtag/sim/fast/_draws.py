@@ -13,13 +13,12 @@ they wait for each other (``_split``).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from swarmtag.sim.fast._jit import inlined, jit
-from swarmtag.sim.fast._layout import Constants, Scratch
+from swarmtag.sim.fast._layout import Constants
 from swarmtag.sim.fast._pcg import standard_normal, uniform
+from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.randomness import Stream
 
 __all__ = ["DRAW_CHUNK", "STREAMS", "chunk_end", "draw", "draw_range", "draw_units"]
@@ -28,15 +27,6 @@ STREAMS = (Stream.MOTION, Stream.BREAKDOWN, Stream.RADIO, Stream.CAMERA)
 """The tick's streams, in the order they draw: the rows of a run's generator states."""
 DRAW_CHUNK = 512
 """Numbers a thread draws at a time for a split run (about 5 µs: a waiting thread is back soon)."""
-
-
-@jit
-def _unit(g0: float, g1: float) -> tuple[float, float]:
-    """``randomness.unit_vectors`` for one pair of Gaussian numbers."""
-    length = math.sqrt(g0 * g0 + g1 * g1)
-    if length == 0:
-        return 1.0, 0.0
-    return g0 / length, g1 / length
 
 
 @inlined
@@ -79,7 +69,13 @@ def _buffers(
     r: int, x: Scratch
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Run ``r``'s buffers of a tick's numbers: walk, sidestep, break-down, radio, camera."""
-    return x.walk_in[r], x.sidestep_in[r], x.breakdown_draw[r], x.radio_draw[r], x.noise[r]
+    return (
+        x.walk_gaussians[r],
+        x.sidestep_gaussians[r],
+        x.breakdown_draw[r],
+        x.radio_draw[r],
+        x.noise[r],
+    )
 
 
 @inlined
@@ -103,8 +99,8 @@ def _draw_numbers(
         g1, high, low = standard_normal(high, low, inc_high, inc_low)
         g2, high, low = standard_normal(high, low, inc_high, inc_low)
         g3, high, low = standard_normal(high, low, inc_high, inc_low)
-        walk[n, 0], walk[n, 1] = _unit(g0, g1)
-        sidestep[n, 0], sidestep[n, 1] = _unit(g2, g3)
+        walk[n, 0], walk[n, 1] = g0, g1  # normalised where used: most robots keep their heading
+        sidestep[n, 0], sidestep[n, 1] = g2, g3
     state[0, 0], state[0, 1] = high, low
     if breakdown > 0:
         high, low, inc_high, inc_low = state[1, 0], state[1, 1], state[1, 2], state[1, 3]

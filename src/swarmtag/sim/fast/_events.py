@@ -11,7 +11,7 @@ in never shows.
 from __future__ import annotations
 
 from swarmtag.sim.fast._jit import inlined
-from swarmtag.sim.fast._layout import EVENT_SLOTS, Scratch
+from swarmtag.sim.fast._scratch import EVENT_SLOTS, Scratch
 
 __all__ = ["emit", "flush_slots", "room_for_tick"]
 

@@ -28,6 +28,7 @@ __all__ = [
     "segment_near_point",
     "step_towards",
     "turn_towards",
+    "unit_vector",
 ]
 
 FACE_X: Final = np.array([1.0, 0.0, -1.0, 0.0])
@@ -113,6 +114,15 @@ def contact(
     if depth > 0:
         return push_x, push_y, depth
     return 0.0, 0.0, depth
+
+
+@jit
+def unit_vector(g0: float, g1: float) -> tuple[float, float]:
+    """``randomness.unit_vectors`` for one pair of Gaussian numbers (``(1, 0)`` for zeros)."""
+    length = math.sqrt(g0 * g0 + g1 * g1)
+    if length == 0:
+        return 1.0, 0.0
+    return g0 / length, g1 / length
 
 
 @jit

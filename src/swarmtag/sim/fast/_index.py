@@ -15,7 +15,8 @@ import math
 
 from swarmtag.sim.fast._grid import fill
 from swarmtag.sim.fast._jit import inlined
-from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._layout import Constants, World
+from swarmtag.sim.fast._scratch import Scratch
 
 __all__ = ["copy_to_slots", "grid_robots", "index_obstacles", "index_robots"]
 

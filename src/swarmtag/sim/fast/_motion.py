@@ -30,7 +30,8 @@ from swarmtag.sim.fast._geometry import (
 from swarmtag.sim.fast._grid import fill, near, near_within, table_bits
 from swarmtag.sim.fast._index import grid_robots
 from swarmtag.sim.fast._jit import inlined
-from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._layout import Constants, World
+from swarmtag.sim.fast._scratch import Scratch
 
 __all__ = ["move_robots", "resolve_run"]
 

@@ -15,7 +15,8 @@ from swarmtag.sim.fast._floor import cell_of
 from swarmtag.sim.fast._geometry import contact
 from swarmtag.sim.fast._index import index_obstacles
 from swarmtag.sim.fast._jit import inlined
-from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._layout import Constants, World
+from swarmtag.sim.fast._scratch import Scratch
 
 __all__ = ["place_orders_run"]
 

@@ -27,18 +27,16 @@ from swarmtag.sim.events import EventKind, EventRecorder, RobotEvents, TickEvent
 from swarmtag.sim.fast._docking import FAILURE_LOWERED, FAILURE_NOT_PICKED_UP
 from swarmtag.sim.fast._draws import STREAMS
 from swarmtag.sim.fast._layout import (
-    EVENT_SLOTS,
     Constants,
-    Scratch,
     World,
     cache_bound,
     cache_capacity_for,
     constants_of,
-    scratch_for,
     state_of,
     world_of,
 )
 from swarmtag.sim.fast._pcg import STATE_WORDS, states_of
+from swarmtag.sim.fast._scratch import EVENT_SLOTS, Scratch, scratch_for
 from swarmtag.sim.fast._split import (
     SYNC_DRAWN,
     SYNC_INDEXED,

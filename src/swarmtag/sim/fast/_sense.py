@@ -16,7 +16,8 @@ from swarmtag.sim.fast._floor import hidden_by_shelves
 from swarmtag.sim.fast._geometry import segment_crosses_box, segment_near_point
 from swarmtag.sim.fast._grid import fill, near
 from swarmtag.sim.fast._jit import inlined
-from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._layout import Constants, World
+from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._tag_cache import hear, known_status
 
 __all__ = ["sense_robots", "tags_advertising"]

@@ -44,8 +44,9 @@ from swarmtag.sim.fast._draws import DRAW_CHUNK, chunk_end, draw_range, draw_uni
 from swarmtag.sim.fast._events import room_for_tick
 from swarmtag.sim.fast._index import copy_to_slots, index_robots
 from swarmtag.sim.fast._jit import entry, inlined
-from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._motion import collide_range, resolve_begin, resolve_finish
+from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._sync import (
     SYNC_ABORT,
     SYNC_LINE,

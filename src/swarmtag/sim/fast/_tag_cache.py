@@ -40,7 +40,8 @@ from __future__ import annotations
 from typing import Final
 
 from swarmtag.sim.fast._jit import inlined
-from swarmtag.sim.fast._layout import Constants, Scratch, World
+from swarmtag.sim.fast._layout import Constants, World
+from swarmtag.sim.fast._scratch import Scratch
 
 __all__ = [
     "FAILURE_CACHE_FULL",
