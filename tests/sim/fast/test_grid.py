@@ -47,19 +47,25 @@ def _queries(
 
 def _cells(at: float, reach: float, cell: float) -> range:
     """The cells along one axis that ``at +- reach`` touches."""
-    return range(math.floor((at - reach) / cell), math.floor((at + reach) / cell) + 1)
+    inverse = 1.0 / cell  # the grid's map: a multiplication by the inverse
+    return range(math.floor((at - reach) * inverse), math.floor((at + reach) * inverse) + 1)
 
 
 @pytest.mark.parametrize(
-    ("side", "bits", "reach_share"),
-    [(3.0, 2, 1.0), (40.0, 2, 0.6), (40.0, 5, 1.0), (200.0, 4, 0.3)],
-    ids=["one-fold", "wrapping", "wide-table", "short-reach"],
+    ("side", "bits", "reach_share", "cell"),
+    [
+        (3.0, 2, 1.0, 1.0),
+        (40.0, 2, 0.6, 1.0),
+        (40.0, 5, 1.0, 1.0),
+        (200.0, 4, 0.3, 1.0),
+        (15.0, 4, 1.0, 0.355),
+    ],
+    ids=["one-fold", "wrapping", "wide-table", "short-reach", "inexact-inverse"],
 )
 @pytest.mark.parametrize("ordered", [True, False], ids=["ordered", "unordered"])
-def test_queries_find_every_point_in_reach_each_once(side, bits, reach_share, ordered):
+def test_queries_find_every_point_in_reach_each_once(side, bits, reach_share, cell, ordered):
     # small tables on a wide arena: most rows of buckets wrap around the fold somewhere
     rng = np.random.default_rng(7)
-    cell = 1.0
     reach = reach_share * cell
     points = rng.random((2, 1, 300)) * side
     xs, ys = points[0], points[1]
@@ -73,8 +79,8 @@ def test_queries_find_every_point_in_reach_each_once(side, bits, reach_share, or
         np.zeros((1, 300), dtype=np.int64),
     )
     _queries((xs, ys, queries), (reach, cell, bits, ordered), grid, found)
-    cells_x = np.floor(xs[0] / cell).astype(np.int64)
-    cells_y = np.floor(ys[0] / cell).astype(np.int64)
+    cells_x = np.floor(xs[0] * (1.0 / cell)).astype(np.int64)
+    cells_y = np.floor(ys[0] * (1.0 / cell)).astype(np.int64)
     fold = (1 << bits) - 1
     for q, (qx, qy) in enumerate(queries):
         got = found[0, q, 1 : found[0, q, 0] + 1]
@@ -90,3 +96,35 @@ def test_queries_find_every_point_in_reach_each_once(side, bits, reach_share, or
         within = found[1, q, 1 : found[1, q, 0] + 1].tolist()
         close = (np.abs(qx - xs[0]) < cell) & (np.abs(qy - ys[0]) < cell)
         assert within == np.flatnonzero(close).tolist()  # ascending, no far point of a fold
+
+
+@pytest.mark.parametrize("cell", [1.0, 0.355, 0.1, 3.7])
+def test_a_point_at_the_edge_of_the_reach_is_found(cell):
+    # points on the cells' borders (and a rounding step either side), queries whose
+    # reach ends there: where the cells' map rounds, a point the caller's test
+    # accepts must still be found (a query mapped otherwise than the points misses some)
+    reach = 0.8 * cell
+    borders = np.arange(1, 60) * cell
+    xs = np.concatenate([np.nextafter(borders, -np.inf), borders, np.nextafter(borders, np.inf)])
+    ys = np.zeros_like(xs)
+    starts = np.concatenate([borders + reach, borders - reach])
+    queries = np.stack(
+        [np.concatenate([starts, np.nextafter(starts, np.inf)]), np.zeros(4 * 59)], 1
+    )
+    points = xs.size
+    found = np.zeros((2, len(queries), points + 1), dtype=np.int64)
+    grid = (
+        np.zeros((1, (1 << 8) + 1), dtype=np.int32),
+        np.zeros((1, points), dtype=np.int64),
+        np.zeros((1, points), dtype=np.int64),
+        np.zeros((1, points, 2)),
+        np.zeros((1, points), dtype=np.int64),
+    )
+    _queries((xs[None], ys[None], queries), (reach, cell, 4, True), grid, found)
+    edge_points = 0
+    for q, (qx, qy) in enumerate(queries):
+        got = set(found[0, q, 1 : found[0, q, 0] + 1].tolist())
+        accepted = np.flatnonzero((np.abs(qx - xs) < reach) & (np.abs(qy - ys) < reach))
+        assert set(accepted.tolist()) <= got
+        edge_points += len(accepted)
+    assert edge_points > len(queries)  # most queries accept a point on a border
