@@ -1,7 +1,7 @@
 """Reference and compiled backends side by side: robot-ticks per second, memory per robot.
 
 Run: ``.venv/bin/python benchmarks/bench_backends.py [--max-robots N] [--threads T ...]
-[--reference-up-to N] [--cases NAME ...]``. Every case simulates one seeded batch with
+[--reference-up-to N] [--cases NAME ...] [--repeat N]``. Every case simulates one seeded batch with
 ``swarmtag.sim.simulate`` (the whole call: scene sampling, kernel, event logs) under
 ``urgency:alpha=0.7`` on the ``paper-sim`` profile and reports robot-ticks per second of
 the ticks actually stepped, for the reference (numpy) backend where it is affordable and
@@ -18,6 +18,11 @@ cases says how the cost grows (1.0: linear). Cases that do not fit in memory are
 skipped with the estimate. The first calls compile the kernel (cached afterwards) or load
 its machine code, the batched path's and the split path's (about 0.3 s each process): they
 are timed separately.
+
+A shared virtual machine's speed can move by a factor of two within an hour. So the script
+times a plain Python loop (``PROBE``) before and after, to say how fast the machine ran,
+and ``--repeat N`` runs every row N times and reports the fastest run (the least disturbed)
+and the median.
 """
 
 from __future__ import annotations
@@ -37,6 +42,8 @@ DENSITY = 0.05
 """Robots per square metre of arena in the single-run cases."""
 SPLIT_FROM = 10_000
 """Robots from which one run is split over threads (``sim/fast/_runner.py``)."""
+PROBE = 10_000_000
+"""Additions in the plain Python loop that says how fast the machine runs right now."""
 
 
 @dataclass(frozen=True)
@@ -80,6 +87,19 @@ def _rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
+def probe_seconds() -> float:
+    """Seconds of a plain Python loop of ``PROBE`` additions at module level.
+
+    The loop of docs/performance.md's notes (globals in a dict): 0.82 s on a
+    normal day of this project's two-core VM, timed there as ``python -c``
+    with the interpreter's start-up (about 0.1 s of it).
+    """
+    loop = compile(f"total = 0\nfor i in range({PROBE}):\n    total += i\n", "probe", "exec")
+    start = time.perf_counter()
+    exec(loop, {})  # a fixed loop at module level, as the notes timed it
+    return time.perf_counter() - start
+
+
 def run(case: Case, backend: str, threads: int) -> tuple[float, float, int]:
     """Seconds of one ``simulate`` call, robot-ticks stepped, and the peak memory growth."""
     before = _rss_mib()
@@ -103,11 +123,15 @@ def main() -> None:
     parser.add_argument("--max-robots", type=int, default=1_000_000)
     parser.add_argument("--reference-up-to", type=int, default=2_000, help="robots")
     parser.add_argument("--threads", type=int, nargs="*", default=[1, 2])
+    parser.add_argument("--repeat", type=int, default=1, help="runs of each row (best, median)")
     args = parser.parse_args()
+    if args.repeat < 1:
+        parser.error(f"--repeat: {args.repeat} is not a positive number of runs")
     cases = [c for c in CASES if c.robots <= args.max_robots]
     if args.cases:
         cases = [c for c in cases if c.name in args.cases]
 
+    print(f"probe: a Python loop of {PROBE:,} additions takes {probe_seconds():.2f} s")
     start = time.perf_counter()
     simulate(Scenario.default(3, 7), Urgency(alpha=0.7), seed=0, runs=1, backend="fast")
     if max(args.threads) > 1:  # one run split over threads: its own kernel calls
@@ -116,7 +140,7 @@ def main() -> None:
     print(f"first fast calls (compile or load the kernels): {time.perf_counter() - start:.1f} s")
     print(
         f"{'case':>6} {'robots':>9} {'runs':>5} {'ticks':>6} {'backend':>10} {'threads':>7} "
-        f"{'seconds':>8} {'robot-ticks/s':>14} {'B/robot':>8}"
+        f"{'seconds':>8} {'robot-ticks/s':>14} {'B/robot':>8} {'median s':>8}"
     )
     costs: list[tuple[int, float]] = []
     for case in cases:
@@ -125,12 +149,15 @@ def main() -> None:
             rows.append(("reference", 1))
         rows += [("fast", t) for t in args.threads]
         for backend, threads in rows:
-            seconds, stepped, grown = run(case, backend, threads)
+            seconds, stepped, grown = run(case, backend, threads)  # memory: the first run's
+            times = [seconds] + [run(case, backend, threads)[0] for _ in range(args.repeat - 1)]
+            seconds = min(times)
             rate = stepped / seconds
             per_robot = grown / case.robots / case.runs if backend == "fast" else float("nan")
             print(
                 f"{case.name:>6} {case.robots:>9,} {case.runs:>5} {case.ticks:>6} "
-                f"{backend:>10} {threads:>7} {seconds:>8.2f} {rate:>14,.0f} {per_robot:>8,.0f}",
+                f"{backend:>10} {threads:>7} {seconds:>8.2f} {rate:>14,.0f} {per_robot:>8,.0f} "
+                f"{float(np.median(times)):>8.2f}",
                 flush=True,
             )
             if backend == "fast" and threads == max(args.threads) and case.runs == 1:
@@ -144,6 +171,7 @@ def main() -> None:
             "cost per robot-tick, largest vs smallest single run: "
             f"{costs[-1][1] / costs[0][1]:.2f}x"
         )
+    print(f"probe again: {probe_seconds():.2f} s")
 
 
 if __name__ == "__main__":
