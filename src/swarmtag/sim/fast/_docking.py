@@ -23,6 +23,9 @@ __all__ = [
     "FAILURE_LOWERED",
     "FAILURE_NOT_PICKED_UP",
     "answer_lifts",
+    "arrive_clocks",
+    "arrive_drive_in",
+    "arrive_requests",
     "arrive_run",
     "carry_robots",
     "deliver_run",
@@ -47,7 +50,19 @@ def arrive_run(r: int, stamp: int, w: World, k: Constants, x: Scratch) -> None:
 
     ``stamp`` marks carriers taken under this tick (``Scratch.carrier_mark``).
     """
-    for n in range(k.robots):
+    arrive_clocks(r, 0, k.robots, stamp, w, k, x)
+    arrive_drive_in(r, stamp, w, k, x)
+    arrive_requests(r, 0, k.robots, w, k, x)
+
+
+@inlined
+def arrive_clocks(r: int, lo: int, hi: int, stamp: int, w: World, k: Constants, x: Scratch) -> None:
+    """Stuck ticks and timers of robots ``lo .. hi - 1``; the carriers they dock at, marked.
+
+    Ranges may run at once on several threads: a robot writes its own
+    entries, and a carrier's mark only ever gets ``stamp`` here.
+    """
+    for n in range(lo, hi):
         mode = w.mode[r, n]
         moved = norm(
             w.robot_pos[r, n, 0] - x.before_pos[r, n, 0],
@@ -61,7 +76,14 @@ def arrive_run(r: int, stamp: int, w: World, k: Constants, x: Scratch) -> None:
             w.timer[r, n] -= 1
         if mode in (_DOCK, _CENTRE, _LIFT):
             x.carrier_mark[r, max(w.target[r, n], 0)] = stamp
-    # drive in: at the predock point, facing the carrier, nobody under it, smallest id first
+
+
+@inlined
+def arrive_drive_in(r: int, stamp: int, w: World, k: Constants, x: Scratch) -> None:
+    """Who drives in or is centred: after every range of ``arrive_clocks``, on one thread.
+
+    At the predock point, facing the carrier, nobody under it, smallest id first.
+    """
     for n in range(k.robots):
         x.drive_in[r, n] = False
         x.centred[r, n] = False
@@ -90,7 +112,15 @@ def arrive_run(r: int, stamp: int, w: World, k: Constants, x: Scratch) -> None:
         ):
             x.drive_in[r, n] = True
             x.carrier_mark[r, target] = stamp + 1  # later ids arriving at it wait
-    for n in range(k.robots):
+
+
+@inlined
+def arrive_requests(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+    """Robots ``lo .. hi - 1`` dock, centre or ask to lift (after ``arrive_drive_in``).
+
+    Each writes its own entries: ranges may run at once on several threads.
+    """
+    for n in range(lo, hi):
         x.lift[r, n] = -1
         if x.drive_in[r, n]:
             w.mode[r, n] = _DOCK

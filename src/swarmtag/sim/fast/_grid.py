@@ -15,8 +15,9 @@ cells folded onto it: the caller tests every point it gets exactly as the
 reference tests every pair, so extra points change nothing. A point left
 out is one that test rejects: points and queries get their cells from one
 map that keeps order (rounding is monotonic), so a point at or beyond
-``x - reach`` as rounded falls in a cell at or beyond the query's first. Sums over bodies must run in index order
-to match the reference bit for bit, so ``near`` can return its points sorted.
+``x - reach`` as rounded falls in a cell at or beyond the query's first.
+Sums over bodies must run in index order to match the reference bit for
+bit, so ``near`` can return its points sorted.
 """
 
 from __future__ import annotations

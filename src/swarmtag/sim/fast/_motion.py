@@ -33,7 +33,14 @@ from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._scratch import Scratch
 
-__all__ = ["move_robots", "resolve_run"]
+__all__ = [
+    "drop_ghosts",
+    "move_robots",
+    "resolve_finish",
+    "resolve_passes",
+    "resolve_run",
+    "settle_positions",
+]
 
 _WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
 
@@ -478,6 +485,14 @@ def resolve_begin(r: int, split: bool, w: World, k: Constants, x: Scratch) -> in
 @inlined
 def resolve_finish(r: int, count: int, w: World, k: Constants, x: Scratch) -> None:
     """After the first pass's ``collide_range``: its update, the other passes, the outcome."""
+    resolve_passes(r, count, w, k, x)
+    settle_positions(r, 0, k.robots, w, k, x)
+    drop_ghosts(r, 0, k.robots, w, k, x)
+
+
+@inlined
+def resolve_passes(r: int, count: int, w: World, k: Constants, x: Scratch) -> None:
+    """The first pass's update and the other passes (one thread: their lists are ordered)."""
     movers = _pass_update(r, count, True, k, x)
     for _ in range(1, k.collision_iterations):
         if movers == 0:
@@ -485,17 +500,34 @@ def resolve_finish(r: int, count: int, w: World, k: Constants, x: Scratch) -> No
         if k.robot_grid:
             count = _next_active(r, movers, k, x)
         movers = _collision_pass(r, count, w, k, x)
-    for n in range(k.robots):
+
+
+@inlined
+def settle_positions(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+    """Robots ``lo .. hi - 1`` where the passes left them, their contacts, their loads with them.
+
+    Each writes its own entries and its own load's (a carrier has one
+    carrier), so ranges may run at once on several threads.
+    """
+    for n in range(lo, hi):
         w.contact[r, n, 0] = x.x[r, n] - x.proposed[r, n, 0]
         w.contact[r, n, 1] = x.y[r, n] - x.proposed[r, n, 1]
         w.robot_pos[r, n, 0] = x.x[r, n]
         w.robot_pos[r, n, 1] = x.y[r, n]
-    for n in range(k.robots):
+    for n in range(lo, hi):
         if x.extent[r, n] > 0:  # loaded: its carrier goes with it
             target = w.target[r, n]
             w.carrier_pos[r, target, 0] = x.x[r, n]
             w.carrier_pos[r, target, 1] = x.y[r, n]
-    for n in range(k.robots):
+
+
+@inlined
+def drop_ghosts(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+    """Robots ``lo .. hi - 1`` clear of the carrier they drove into overlap it no longer.
+
+    Reads every carrier where ``settle_positions`` left it: after all its ranges.
+    """
+    for n in range(lo, hi):
         ghost = w.ghost[r, n]
         if ghost < 0:
             continue

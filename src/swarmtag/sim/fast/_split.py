@@ -15,8 +15,10 @@ at once; each tick is
    slots;
 4. (every thread, a range each) the first pass's new positions (it reads
    only the positions at the pass's start);
-5. (thread 0) the first pass's update, the other passes (few robots),
-   arrivals and docking (``tick_settle``: the last moves of the tick);
+5. (thread 0) the first pass's update, the other passes (few robots);
+   then (every thread, a range each, thread 0 alone for who drives in,
+   smallest id first) the robots' positions, arrivals and docking
+   (``_settle``: the last moves of the tick);
 6. (thread 0) every later phase (``tick_finish``), while thread 1 builds
    the robots' index of the next tick (they stand where it starts), so
    that step 1 of the next tick is short (the index of a run's first
@@ -40,12 +42,24 @@ from typing import Final
 
 import numpy as np
 
+from swarmtag.sim.fast._docking import (
+    arrive_clocks,
+    arrive_drive_in,
+    arrive_requests,
+    dock_robots,
+)
 from swarmtag.sim.fast._draws import DRAW_CHUNK, chunk_end, draw_range, draw_units
 from swarmtag.sim.fast._events import room_for_tick
 from swarmtag.sim.fast._index import copy_to_slots, index_robots
 from swarmtag.sim.fast._jit import entry, inlined
 from swarmtag.sim.fast._layout import Constants, World
-from swarmtag.sim.fast._motion import collide_range, resolve_begin, resolve_finish
+from swarmtag.sim.fast._motion import (
+    collide_range,
+    drop_ghosts,
+    resolve_begin,
+    resolve_passes,
+    settle_positions,
+)
 from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._sync import (
     SYNC_ABORT,
@@ -60,7 +74,7 @@ from swarmtag.sim.fast._sync import (
     pause,
     sync_array,
 )
-from swarmtag.sim.fast._tick import tick_begin, tick_finish, tick_robots, tick_settle
+from swarmtag.sim.fast._tick import tick_begin, tick_finish, tick_robots
 
 __all__ = ["SYNC_DRAWN", "SYNC_INDEXED", "split_sync", "split_ticks", "thread_scratch"]
 
@@ -208,6 +222,46 @@ def _first_pass(
     return count
 
 
+@inlined
+def _settle(
+    part: int,
+    parts: int,
+    r: int,
+    t: int,
+    count: int,
+    streams: np.ndarray,
+    sync: np.ndarray,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> bool:
+    """Step 5: the later collision passes (thread 0), then arrivals and docking, a range each.
+
+    ``_tick.tick_settle`` after ``_motion.resolve_finish``, cut where a loop
+    over the robots reads what another robot's range wrote. False if a
+    thread will not come.
+    """
+    lo, hi = _part(k.robots, part, parts)
+    if part == 0:
+        resolve_passes(r, count, w, k, x)
+    if not _meet(parts, r, streams, sync, k, x):
+        return False
+    settle_positions(r, lo, hi, w, k, x)
+    if not _meet(parts, r, streams, sync, k, x):  # ghosts read carriers other ranges moved
+        return False
+    drop_ghosts(r, lo, hi, w, k, x)
+    arrive_clocks(r, lo, hi, 4 * t, w, k, x)
+    if not _meet(parts, r, streams, sync, k, x):  # drive-in reads every robot's mark
+        return False
+    if part == 0:
+        arrive_drive_in(r, 4 * t, w, k, x)
+    if not _meet(parts, r, streams, sync, k, x):
+        return False
+    arrive_requests(r, lo, hi, w, k, x)
+    dock_robots(r, lo, hi, w, x)
+    return True
+
+
 @entry
 def split_ticks(
     part: int,
@@ -263,9 +317,8 @@ def split_ticks(
         count = _first_pass(part, parts, r, streams, sync, w, k, x)
         if count < 0:
             return
-        if part == 0:
-            resolve_finish(r, count, w, k, x)
-            tick_settle(r, t, w, k, x)
+        if not _settle(part, parts, r, t, count, streams, sync, w, k, x):
+            return
         if parts > 1:  # the robots stand where tick t + 1 starts: thread 1 indexes them
             if not _meet(parts, r, streams, sync, k, x):
                 return
