@@ -34,6 +34,7 @@ __all__ = [
 
 F8 = NDArray[np.float64]
 I8 = NDArray[np.int64]
+I4 = NDArray[np.int32]
 B1 = NDArray[np.bool_]
 S1 = NDArray[np.int8]
 

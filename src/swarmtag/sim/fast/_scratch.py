@@ -11,18 +11,11 @@ from __future__ import annotations
 from typing import Final, NamedTuple
 
 import numpy as np
-from numpy.typing import NDArray
 
 from swarmtag.sim.fast._grid import table_bits
-from swarmtag.sim.fast._layout import Constants
+from swarmtag.sim.fast._layout import B1, F8, I4, I8, S1, Constants
 
 __all__ = ["EVENT_SLOTS", "Scratch", "scratch_for"]
-
-F8 = NDArray[np.float64]
-I8 = NDArray[np.int64]
-I4 = NDArray[np.int32]
-B1 = NDArray[np.bool_]
-S1 = NDArray[np.int8]
 
 EVENT_SLOTS: Final = 8
 """Robot event kinds (``EventKind`` 1-8); a robot has at most one of each per tick."""
