@@ -42,6 +42,13 @@ from typing import Final
 
 import numpy as np
 
+from swarmtag.sim.fast._collide import (
+    collide_range,
+    drop_ghosts,
+    resolve_begin,
+    resolve_passes,
+    settle_positions,
+)
 from swarmtag.sim.fast._docking import (
     arrive_clocks,
     arrive_drive_in,
@@ -53,13 +60,6 @@ from swarmtag.sim.fast._events import room_for_tick
 from swarmtag.sim.fast._index import copy_to_slots, index_robots
 from swarmtag.sim.fast._jit import entry, inlined
 from swarmtag.sim.fast._layout import Constants, World
-from swarmtag.sim.fast._motion import (
-    collide_range,
-    drop_ghosts,
-    resolve_begin,
-    resolve_passes,
-    settle_positions,
-)
 from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._sync import (
     SYNC_ABORT,

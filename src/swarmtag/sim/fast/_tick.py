@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from swarmtag.sim.fast._collide import resolve_run
 from swarmtag.sim.fast._decide import break_down_robots, decide_robots
 from swarmtag.sim.fast._docking import (
     answer_lifts,
@@ -29,7 +30,7 @@ from swarmtag.sim.fast._events import flush_slots, room_for_tick
 from swarmtag.sim.fast._index import index_obstacles, index_robots
 from swarmtag.sim.fast._jit import entry, inlined, jit
 from swarmtag.sim.fast._layout import Constants, World
-from swarmtag.sim.fast._motion import move_robots, resolve_run, start_body
+from swarmtag.sim.fast._motion import move_robots, start_body
 from swarmtag.sim.fast._orders import place_orders_run
 from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._sense import sense_robots, tags_advertising
