@@ -117,7 +117,7 @@ class Scratch(NamedTuple):
     gathered: I8
     """(R, max(N, C)) bodies a grid query found, ascending (collisions)."""
     active: I8
-    """(R, N) the robots a collision pass computes (large swarms: those near a move)."""
+    """(R, N) the robots a collision pass computes (after the first: those near a move)."""
     movers: I8
     """(R, N) the robots the last collision pass moved ..."""
     mover_x: F8
