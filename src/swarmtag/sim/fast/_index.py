@@ -1,7 +1,8 @@
 """The per-tick index of a run: its obstacle carriers and the grids that find bodies near a point.
 
-Built at the start of a tick from the state the tick starts from (and the
-obstacles again after a lift): the obstacle list (carriers in the arena and
+Built at the start of a tick from the state the tick starts from (the
+obstacles only where they changed since: after a lift, an order, a call's
+start): the obstacle list (carriers in the arena and
 not carried, ascending), and for large swarms uniform grids (``_grid``) of
 the obstacles and of the robots, fine ones (cells as wide as a collision's
 reach) for collisions and taken faces, coarse ones (cells as wide as the
@@ -23,7 +24,13 @@ __all__ = ["copy_to_slots", "grid_robots", "index_obstacles", "index_robots"]
 
 @inlined
 def index_obstacles(r: int, w: World, k: Constants, x: Scratch) -> None:
-    """List run ``r``'s obstacle carriers (ascending), box them and, where used, grid them."""
+    """List run ``r``'s obstacle carriers (ascending), box them and, where used, grid them.
+
+    The index stays current (``Scratch.obstacles_current``) until the obstacles
+    change: a tick that lifts a carrier or places an order indexes them again
+    at once (``_docking.deliver_run``, ``_orders``), and a kernel call starts
+    without it (``_tick.start_call``: the caller may have changed the state).
+    """
     count = 0
     low_x = low_y = math.inf
     high_x = high_y = -math.inf
@@ -44,6 +51,7 @@ def index_obstacles(r: int, w: World, k: Constants, x: Scratch) -> None:
     x.obstacle_box[r, 1] = high_x
     x.obstacle_box[r, 2] = low_y
     x.obstacle_box[r, 3] = high_y
+    x.obstacles_current[r] = True
     if k.obstacle_grid:
         fill(
             r,

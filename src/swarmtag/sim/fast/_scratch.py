@@ -61,9 +61,15 @@ class Scratch(NamedTuple):
     advertising: I8
     """(R, C) this tick's advertising tags that are in the arena, ``advertising_count`` of them."""
     advertising_count: I8
+    advert_remainder: I8
+    """(R, C) ``(t * tick_us - phase) mod advert_us`` of each tag at tick ``advert_tick``."""
+    advert_tick: I8
+    """(R,) the tick of ``advert_remainder``; -1: to be computed afresh (``_tick.start_call``)."""
     obstacles: I8
     """(R, C) this tick's obstacle carriers (in the arena, not carried), in index order."""
     obstacle_count: I8
+    obstacles_current: B1
+    """(R,) whether the obstacle index is the run's now (``_index.index_obstacles``)."""
     obstacle_x: F8
     """(R, C) the obstacles' x, in ``obstacles`` order."""
     obstacle_box: F8
@@ -204,8 +210,11 @@ def scratch_for(runs: int, k: Constants, capacity: int) -> Scratch:
         advertises=np.zeros(c, dtype=bool),
         advertising=np.zeros(c, dtype=np.int64),
         advertising_count=np.zeros(runs, dtype=np.int64),
+        advert_remainder=np.zeros(c, dtype=np.int64),
+        advert_tick=np.full(runs, -1, dtype=np.int64),
         obstacles=np.zeros(c, dtype=np.int64),
         obstacle_count=np.zeros(runs, dtype=np.int64),
+        obstacles_current=np.zeros(runs, dtype=bool),
         obstacle_x=floats(*c),
         obstacle_box=floats(runs, 4),
         obstacle_y=floats(*c),

@@ -30,14 +30,30 @@ _AWAITING = 1
 def tags_advertising(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     """Which tags of run ``r`` advertise during tick ``t`` (``sense.advertising``).
 
-    Also lists those in the arena (``Scratch.advertising``).
+    Also lists those in the arena (``Scratch.advertising``). A tag sends in
+    the tick's span ``(after, until]`` as often as a multiple of its interval
+    past its phase lies in it: with ticks shorter than the interval, at most
+    once, exactly when ``(until - phase) mod interval < tick``. That
+    remainder is carried from tick to tick by an addition (two integer
+    divisions a tag every tick were most of a small run's tick start).
     """
     after = (t - 1) * k.tick_us
     until = t * k.tick_us
+    interval = k.advert_us
+    carried = k.tick_us < interval and x.advert_tick[r] == t - 1
+    x.advert_tick[r] = t
     count = 0
     for c in range(k.carriers):
-        phase = w.advert_phase[r, c]
-        sent = (until - phase) // k.advert_us - (after - phase) // k.advert_us
+        if carried:
+            remainder = x.advert_remainder[r, c] + k.tick_us
+            if remainder >= interval:
+                remainder -= interval
+            sent = 1 if remainder < k.tick_us else 0
+        else:
+            phase = w.advert_phase[r, c]
+            remainder = (until - phase) % interval
+            sent = (until - phase) // interval - (after - phase) // interval
+        x.advert_remainder[r, c] = remainder
         x.advertises[r, c] = sent > 0
         if sent > 0 and w.present[r, c]:
             x.advertising[r, count] = c

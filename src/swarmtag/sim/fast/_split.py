@@ -74,7 +74,7 @@ from swarmtag.sim.fast._sync import (
     pause,
     sync_array,
 )
-from swarmtag.sim.fast._tick import tick_begin, tick_finish, tick_robots
+from swarmtag.sim.fast._tick import start_call, tick_begin, tick_finish, tick_robots
 
 __all__ = ["SYNC_DRAWN", "SYNC_INDEXED", "split_sync", "split_ticks", "thread_scratch"]
 
@@ -287,6 +287,8 @@ def split_ticks(
     """
     room = k.robots + k.pickup_slots.shape[0]
     lo, hi = _part(k.robots, part, parts)
+    if part == 0:
+        start_call(r, x)
     while True:
         if part == 0:
             go = w.ended_at[r] < 0 and w.run_tick[r] < stop and x.failure[r] == 0

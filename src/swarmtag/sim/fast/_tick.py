@@ -35,7 +35,7 @@ from swarmtag.sim.fast._orders import place_orders_run
 from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._sense import sense_robots, tags_advertising
 
-__all__ = ["advance", "tick_run"]
+__all__ = ["advance", "start_call", "tick_run"]
 
 ROBOT_BLOCK = 256
 """Robots a split run's thread takes through each phase in turn (``tick_robots``; 64 to
@@ -58,6 +58,18 @@ def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
             remaining = True
     if w.ended_at[r] < 0 and (not remaining or t >= k.run_ticks):
         w.ended_at[r] = t
+
+
+@inlined
+def start_call(r: int, x: Scratch) -> None:
+    """A kernel call's first tick of run ``r`` builds afresh what the caller may have changed.
+
+    The obstacle index (``Scratch.obstacles_current``) and the tags'
+    advertising clocks (``Scratch.advert_tick``) are otherwise kept from tick
+    to tick.
+    """
+    x.obstacles_current[r] = False
+    x.advert_tick[r] = -1
 
 
 @inlined
@@ -97,7 +109,8 @@ def tick_begin(r: int, t: int, robots: bool, w: World, k: Constants, x: Scratch)
         x.before_mode[r, n] = w.mode[r, n]
         x.before_pos[r, n, 0] = w.robot_pos[r, n, 0]
         x.before_pos[r, n, 1] = w.robot_pos[r, n, 1]
-    index_obstacles(r, w, k, x)
+    if not x.obstacles_current[r]:  # else unchanged since the last tick indexed them
+        index_obstacles(r, w, k, x)
     if robots:
         index_robots(r, w, k, x)
     if k.split:
@@ -174,6 +187,7 @@ def _run_to(
     x: Scratch,
 ) -> None:
     """Run ``r`` tick by tick to ``until``, its end, or a full event buffer."""
+    start_call(r, x)
     while w.ended_at[r] < 0 and w.run_tick[r] < until and x.failure[r] == 0:
         if not room_for_tick(r, k.robots + k.pickup_slots.shape[0], x):
             return
