@@ -35,7 +35,7 @@ __all__ = [
     "settle_positions",
 ]
 
-_DOCK, _CENTRE = 2, 3
+_WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
 
 
 @inlined
