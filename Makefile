@@ -5,7 +5,7 @@ VENV   ?= .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint typecheck unit clean
+.PHONY: demo test lint typecheck unit clean generate
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -42,6 +42,11 @@ unit: $(STAMP)
 	$(BIN)/pytest -m serial
 
 test: lint typecheck unit
+
+# The typed parameter records derived from the parameter schema (docs/architecture.md,
+# "How to add a mechanic"); tests/sim/model/test_kernel_parameters.py fails while they are stale.
+generate: $(STAMP)
+	$(BIN)/python -c "from swarmtag.sim.model.kernel_parameters import main; main()"
 
 clean:
 	rm -rf $(VENV) .mypy_cache .pytest_cache .ruff_cache .hypothesis

@@ -1,11 +1,12 @@
 """Reference and compiled backends side by side: robot-ticks per second, memory per robot.
 
 Run: ``.venv/bin/python benchmarks/bench_backends.py [--max-robots N] [--threads T ...]
-[--reference-up-to N] [--cases NAME ...] [--repeat N]``. Every case simulates one seeded batch with
-``swarmtag.sim.simulate`` (the whole call: scene sampling, kernel, event logs) under
-``urgency:alpha=0.7`` on the ``paper-sim`` profile and reports robot-ticks per second of
-the ticks actually stepped, for the reference (numpy) backend where it is affordable and
-for the fast (numba) backend on 1 and 2 threads; the same process, the same runs.
+[--reference-up-to N] [--cases NAME ...] [--repeat N] [--out FILE.json]``. Every case
+simulates one seeded batch with ``swarmtag.sim.simulate`` (the whole call: scene sampling,
+kernel, event logs) under ``urgency:alpha=0.7`` on the ``paper-sim`` profile and reports
+robot-ticks per second of the ticks actually stepped, for the reference (numpy) backend
+where it is affordable and for the fast (numba) backend on 1 and 2 threads; the same
+process, the same runs.
 
 - ``3x7`` and ``20x40``: the lab set-ups batched over runs (1000 and 100 runs, 3000 ticks);
 - ``200``, ``2k``, ``20k``, ``200k``, ``1M``: one run of that many robots, 256 carriers
@@ -20,9 +21,10 @@ its machine code, the batched path's and the split path's (about 0.3 s each proc
 are timed separately.
 
 A shared virtual machine's speed can move by a factor of two within an hour. So the script
-times a plain Python loop (``PROBE``) before and after, to say how fast the machine ran,
+times a plain Python loop (``_results.probe_seconds``) before and after, to say how fast it ran,
 and ``--repeat N`` runs every row N times and reports the fastest run (the least disturbed)
-and the median.
+and the median. Rows, probes, first-call time and slope go to ``benchmarks/results/``
+(``_results.py``).
 """
 
 from __future__ import annotations
@@ -31,9 +33,10 @@ import argparse
 import math
 import resource
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
+from _results import PROBE, begin, probe_seconds
 
 from swarmtag.policy import Urgency
 from swarmtag.sim import Scenario, load_profile, simulate
@@ -42,8 +45,6 @@ DENSITY = 0.05
 """Robots per square metre of arena in the single-run cases."""
 SPLIT_FROM = 10_000
 """Robots from which one run is split over threads (``sim/fast/_runner.py``)."""
-PROBE = 10_000_000
-"""Additions in the plain Python loop that says how fast the machine runs right now."""
 
 
 @dataclass(frozen=True)
@@ -87,19 +88,6 @@ def _rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def probe_seconds() -> float:
-    """Seconds of a plain Python loop of ``PROBE`` additions at module level.
-
-    The loop of docs/performance.md's notes (globals in a dict): 0.82 s on a
-    normal day of this project's two-core VM, timed there as ``python -c``
-    with the interpreter's start-up (about 0.1 s of it).
-    """
-    loop = compile(f"total = 0\nfor i in range({PROBE}):\n    total += i\n", "probe", "exec")
-    start = time.perf_counter()
-    exec(loop, {})  # a fixed loop at module level, as the notes timed it
-    return time.perf_counter() - start
-
-
 def run(case: Case, backend: str, threads: int) -> tuple[float, float, int]:
     """Seconds of one ``simulate`` call, robot-ticks stepped, and the peak memory growth."""
     before = _rss_mib()
@@ -124,20 +112,20 @@ def main() -> None:
     parser.add_argument("--reference-up-to", type=int, default=2_000, help="robots")
     parser.add_argument("--threads", type=int, nargs="*", default=[1, 2])
     parser.add_argument("--repeat", type=int, default=1, help="runs of each row (best, median)")
-    args = parser.parse_args()
+    args, record = begin(parser, __file__)
     if args.repeat < 1:
         parser.error(f"--repeat: {args.repeat} is not a positive number of runs")
     cases = [c for c in CASES if c.robots <= args.max_robots]
     if args.cases:
         cases = [c for c in cases if c.name in args.cases]
-
-    print(f"probe: a Python loop of {PROBE:,} additions takes {probe_seconds():.2f} s")
+    print(f"probe: a Python loop of {PROBE:,} additions takes {record.machine['probe_s']:.2f} s")
     start = time.perf_counter()
     simulate(Scenario.default(3, 7), Urgency(alpha=0.7), seed=0, runs=1, backend="fast")
     if max(args.threads) > 1:  # one run split over threads: its own kernel calls
         warm = Case("warm", SPLIT_FROM, 256, 1, 2).scenario()
         simulate(warm, Urgency(alpha=0.7), seed=0, runs=1, backend="fast", threads=2)
-    print(f"first fast calls (compile or load the kernels): {time.perf_counter() - start:.1f} s")
+    first = record.summary["first_calls_s"] = time.perf_counter() - start
+    print(f"first fast calls (compile or load the kernels): {first:.1f} s")
     print(
         f"{'case':>6} {'robots':>9} {'runs':>5} {'ticks':>6} {'backend':>10} {'threads':>7} "
         f"{'seconds':>8} {'robot-ticks/s':>14} {'B/robot':>8} {'median s':>8}"
@@ -160,18 +148,29 @@ def main() -> None:
                 f"{float(np.median(times)):>8.2f}",
                 flush=True,
             )
+            record.row(
+                **asdict(case),
+                backend=backend,
+                threads=threads,
+                seconds=seconds,
+                median_seconds=float(np.median(times)),
+                robot_ticks=stepped,
+                robot_ticks_per_s=rate,
+                bytes_per_robot=per_robot,
+            )
             if backend == "fast" and threads == max(args.threads) and case.runs == 1:
                 costs.append((case.robots, seconds / stepped))
     if len(costs) >= 2:
         x = np.log([c[0] for c in costs])
         y = np.log([c[0] * c[1] for c in costs])  # cost per tick of the whole swarm
-        slope = np.polyfit(x, y, 1)[0]
+        slope = float(np.polyfit(x, y, 1)[0])
+        ratio = costs[-1][1] / costs[0][1]
         print(f"log-log slope of the cost of a tick against robots (1.0 = linear): {slope:.2f}")
-        print(
-            "cost per robot-tick, largest vs smallest single run: "
-            f"{costs[-1][1] / costs[0][1]:.2f}x"
-        )
-    print(f"probe again: {probe_seconds():.2f} s")
+        print(f"cost per robot-tick, largest vs smallest single run: {ratio:.2f}x")
+        record.summary.update(slope=slope, cost_ratio_largest_smallest=ratio)
+    probe = record.summary["probe_after_s"] = probe_seconds()
+    print(f"probe again: {probe:.2f} s")
+    record.save()
 
 
 if __name__ == "__main__":

@@ -1,15 +1,19 @@
 """Speed of the two controllers: built-in (vectorised) vs behaviour trees (software-in-the-loop).
 
-Run: ``.venv/bin/python benchmarks/bench_controller.py [--quick] [--repeat N]`` — for
-each case (robots / carriers, profile, ticks, runs in one batch) calls
-``simulate(..., controller="builtin")`` and ``simulate(..., controller="bt")`` in this
-one process and prints the wall seconds of the whole call (scene sampling, kernel,
-controller and event logs included; best of ``--repeat``), robot-ticks per second
-(robots times the ticks each run actually stepped, ``result.end_tick``, summed over
-runs), the ratio builtin/bt of those rates, and whether every run's carrier and event
-logs (``run_csv``) came out byte-identical under both controllers. ``--quick`` runs
-shorter, smaller batches (a smoke test, not a measurement). Both controllers are warmed
-up on a tiny batch first, so one-off imports (py_trees) are not timed.
+Run: ``.venv/bin/python benchmarks/bench_controller.py [--quick] [--repeat N]
+[--backend reference|fast] [--out FILE.json]`` — for each case (robots / carriers, profile,
+ticks, runs in one batch) calls ``simulate(..., controller="builtin")`` and
+``simulate(..., controller="bt")`` in this one process and prints the wall seconds of the
+whole call (scene sampling, kernel, controller and event logs included; best of
+``--repeat``), robot-ticks per second (robots times the ticks each run actually stepped,
+``result.end_tick``, summed over runs), the ratio builtin/bt of those rates, and whether
+every run's carrier and event logs (``run_csv``) came out byte-identical under both
+controllers; the rows go to ``benchmarks/results/`` (``_results.py``). The trees always run
+on the reference (numpy) world; the built-in controller runs there too unless ``--backend
+fast`` (the compiled kernel, the default of ``simulate``) is given, so by default the two
+controllers are compared on the same world. ``--quick`` runs shorter, smaller batches (a
+smoke test, not a measurement). Both controllers are warmed up on a tiny batch first, so
+one-off imports (py_trees) and the compiled kernel's loading are not timed.
 """
 
 from __future__ import annotations
@@ -18,8 +22,11 @@ import argparse
 import time
 from typing import NamedTuple
 
+from _results import begin
+
 from swarmtag.policy import Urgency
-from swarmtag.sim import Scenario, SimResult, run_csv, simulate
+from swarmtag.sim import Scenario, SimResult, simulate
+from swarmtag.sim.checks import run_csv
 
 
 class Case(NamedTuple):
@@ -56,14 +63,16 @@ def scenario_of(case: Case) -> Scenario:
     return Scenario.from_mapping({**base.to_mapping(), "ticks": case.ticks})
 
 
-def timed(case: Case, controller: str, repeat: int) -> tuple[float, SimResult]:
+def timed(case: Case, controller: str, repeat: int, backend: str) -> tuple[float, SimResult]:
     """Best wall seconds of ``simulate`` over ``repeat`` batches, and the last result."""
     scenario = scenario_of(case)
     best = float("inf")
     result = None
     for _ in range(repeat):
         start = time.perf_counter()
-        result = simulate(scenario, POLICY, seed=SEED, runs=case.runs, controller=controller)
+        result = simulate(
+            scenario, POLICY, seed=SEED, runs=case.runs, controller=controller, backend=backend
+        )
         best = min(best, time.perf_counter() - start)
     assert result is not None
     return best, result
@@ -81,11 +90,16 @@ def same_logs(first: SimResult, second: SimResult) -> bool:
     return all(run_csv(first, int(i)) == run_csv(second, int(i)) for i in first.run_ids)
 
 
-def warm_up() -> None:
+def backend_of(controller: str, builtin_backend: str) -> str:
+    """The world a controller runs on: the trees always on the reference one."""
+    return builtin_backend if controller == "builtin" else "reference"
+
+
+def warm_up(builtin_backend: str) -> None:
     """One tiny batch per controller, so imports and first-call costs are not timed."""
     case = Case("warm-up", 3, 7, "base", 20, 1)
     for controller in CONTROLLERS:
-        simulate(scenario_of(case), POLICY, seed=SEED, runs=case.runs, controller=controller)
+        timed(case, controller, 1, backend_of(controller, builtin_backend))
 
 
 HEADER = ("case", "robots", "carriers", "profile", "ticks", "runs", "controller")
@@ -103,14 +117,22 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="small, short cases (smoke test)")
     parser.add_argument("--repeat", type=int, default=1, help="batches per case, best kept")
-    args = parser.parse_args()
+    parser.add_argument(
+        "--backend",
+        choices=("reference", "fast"),
+        default="reference",
+        help="the built-in controller's world (the trees always run on the reference one)",
+    )
+    args, record = begin(parser, __file__)
     if args.repeat < 1:
         parser.error("--repeat must be at least 1")
-    warm_up()
+    warm_up(args.backend)
     print(row(*HEADER))
     all_same = True
     for case in QUICK if args.quick else CASES:
-        measured = {c: timed(case, c, args.repeat) for c in CONTROLLERS}
+        measured = {
+            c: timed(case, c, args.repeat, backend_of(c, args.backend)) for c in CONTROLLERS
+        }
         rates = {c: robot_ticks(case, r) / wall for c, (wall, r) in measured.items()}
         same = same_logs(measured["builtin"][1], measured["bt"][1])
         all_same &= same
@@ -133,7 +155,18 @@ def main() -> None:
                     ("yes" if same else "NO") if is_bt else "-",
                 )
             )
+            record.row(
+                **case._asdict(),
+                controller=controller,
+                backend=backend_of(controller, args.backend),
+                wall_s=wall,
+                robot_ticks=robot_ticks(case, result),
+                robot_ticks_per_s=rates[controller],
+                logs_identical=same,
+            )
     print(f"event logs identical in every case: {'yes' if all_same else 'NO'}")
+    record.summary["logs_identical"] = all_same
+    record.save()
 
 
 if __name__ == "__main__":

@@ -1,23 +1,25 @@
 """Time `simulate --mcap` (writing one recorded run) and `log import` of it (a plain script).
 
 For each case: simulate one run with recording, write it as MCAP, read the event log back,
-and check that it is the run's own. Prints ticks written, seconds, file size. Usage:
+and check that it is the run's own. Prints ticks written, seconds, file size, and writes
+them to ``benchmarks/results/`` (``_results.py``). Usage:
 
-    .venv/bin/python benchmarks/bench_mcap.py [--quick]
+    .venv/bin/python benchmarks/bench_mcap.py [--quick] [--out FILE.json]
 """
 
 from __future__ import annotations
 
 import argparse
-import platform
 import tempfile
 import time
 from pathlib import Path
 
+from _results import begin
+
 from swarmtag.io.bags import read_bag
 from swarmtag.policy import Urgency
 from swarmtag.sim import Scenario, simulate
-from swarmtag.sim.mcap import write_mcap
+from swarmtag.sim.outputs.mcap import write_mcap
 
 CASES = [(3, 7, "paper-sim", 3000), (20, 40, "paper-sim", 1000), (3, 7, "lab", 3000)]
 QUICK = [(3, 7, "paper-sim", 300), (20, 40, "paper-sim", 100)]
@@ -26,8 +28,7 @@ QUICK = [(3, 7, "paper-sim", 300), (20, 40, "paper-sim", 100)]
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="short runs (a smoke test)")
-    args = parser.parse_args()
-    print(f"python {platform.python_version()} on {platform.machine()}")
+    args, record = begin(parser, __file__)
     print("robots/carriers profile ticks | written ticks | write s | import s | MiB | same log")
     for robots, carriers, profile, ticks in QUICK if args.quick else CASES:
         base = Scenario.default(robots, carriers, profile=profile)
@@ -48,6 +49,18 @@ def main() -> None:
             f"{robots}/{carriers} {profile} {ticks} | {written} | {wrote:.2f} | {read:.2f} | "
             f"{size:.2f} | {same}"
         )
+        record.row(
+            robots=robots,
+            carriers=carriers,
+            profile=profile,
+            ticks=ticks,
+            ticks_written=written,
+            write_s=wrote,
+            import_s=read,
+            mib=size,
+            same_log=same,
+        )
+    record.save()
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 """Throughput of batched carrier selection, the per-tick decision of every robot.
 
-Run: ``.venv/bin/python benchmarks/bench_select.py`` — prints robot-decisions
-per second for (runs, robots, carriers) batches like the simulator's.
+Run: ``.venv/bin/python benchmarks/bench_select.py [--repeat N] [--out FILE.json]`` — prints
+milliseconds per call and robot-decisions per second for (runs, robots, carriers) batches like
+the simulator's, and writes them to ``benchmarks/results/`` (``_results.py``).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import argparse
 import time
 
 import numpy as np
+from _results import begin
 
 from swarmtag.policy import Proximity, Urgency, Weighted, select
 
@@ -39,13 +41,23 @@ def main() -> None:
     """Print a table of seconds per call and robot-decisions per second."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=7, help="calls per measurement, best kept")
-    args = parser.parse_args()
+    args, record = begin(parser, __file__)
     print(f"{'runs x robots x carriers':>26}  {'policy':<18} {'ms/call':>9} {'decisions/s':>13}")
     for shape in SHAPES:
         for name, seconds in bench(shape, args.repeat).items():
             decisions = shape[0] * shape[1] / seconds
             label = " x ".join(map(str, shape))
             print(f"{label:>26}  {name:<18} {seconds * 1e3:9.3f} {decisions:13.3g}")
+            runs, robots, carriers = shape
+            record.row(
+                runs=runs,
+                robots=robots,
+                carriers=carriers,
+                policy=name,
+                ms_per_call=seconds * 1e3,
+                decisions_per_s=decisions,
+            )
+    record.save()
 
 
 if __name__ == "__main__":

@@ -1,11 +1,12 @@
-"""Speed of the numpy simulation kernel: robot-ticks per second, batched over runs.
+"""Speed of the numpy (reference) simulation kernel: robot-ticks per second, batched over runs.
 
-Run: ``.venv/bin/python benchmarks/bench_sim.py [--profile NAME ...]`` — steps
-a fixed number of ticks for 3, 20 and 200 robots under each profile (default:
-``base`` and ``paper-sim``) and prints robot-ticks per second of
-``run_batch`` (random draws, kernel, event recording; scene sampling
-excluded). Rates count the ticks actually stepped, so a batch whose runs all
-end early is still measured fairly.
+Run: ``.venv/bin/python benchmarks/bench_sim.py [--profile NAME ...] [--repeat N]
+[--out FILE.json]`` — steps a fixed number of ticks for 3, 20 and 200 robots under each
+profile (default: ``base`` and ``paper-sim``) and prints robot-ticks per second of
+``run_batch`` (random draws, kernel, event recording; scene sampling excluded), best of
+``--repeat`` batches, and writes them to ``benchmarks/results/`` (``_results.py``). Rates
+count the ticks actually stepped, so a batch whose runs all end early is still measured
+fairly.
 """
 
 from __future__ import annotations
@@ -13,8 +14,11 @@ from __future__ import annotations
 import argparse
 import time
 
+from _results import begin
+
 from swarmtag.policy import Urgency
-from swarmtag.sim import RandomSource, load_profile, make_params, run_batch, seeded_state
+from swarmtag.sim import RandomSource, load_profile, make_params, run_batch
+from swarmtag.sim.runner import seeded_state
 
 # (robots, carriers, runs, ticks): carriers per the density rule; runs fill the batch.
 CASES = [
@@ -50,7 +54,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=3, help="batches per case, best kept")
     parser.add_argument("--profile", action="append", help="profile(s) to measure")
-    args = parser.parse_args()
+    args, record = begin(parser, __file__)
     header = ("profile", "robots", "carriers", "runs", "ticks", "robot-ticks/s")
     print(
         " ".join(
@@ -62,6 +66,15 @@ def main() -> None:
             rate = bench(profile, case, args.repeat)
             robots, carriers, runs, ticks = case
             print(f"{profile:>10} {robots:>6} {carriers:>8} {runs:>5} {ticks:>5} {rate:>14,.0f}")
+            record.row(
+                profile=profile,
+                robots=robots,
+                carriers=carriers,
+                runs=runs,
+                ticks=ticks,
+                robot_ticks_per_s=rate,
+            )
+    record.save()
 
 
 if __name__ == "__main__":

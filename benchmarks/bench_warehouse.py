@@ -1,7 +1,7 @@
 """Warehouses at scale: robot-ticks per second and deliveries, reference and compiled backends.
 
 Run: ``.venv/bin/python benchmarks/bench_warehouse.py [--cases NAME ...] [--threads T ...]
-[--reference-up-to N]``. Every case simulates one seeded batch with
+[--reference-up-to N] [--out FILE.json]``. Every case simulates one seeded batch with
 ``swarmtag.sim.simulate`` (the whole call) under ``urgency:alpha=0.7`` on the ``lab``
 profile (0.1 s ticks) and reports robot-ticks per second, the orders that fell due, the
 deliveries and the mean latency (a sanity check that the floor works, not a result).
@@ -18,7 +18,8 @@ deliveries and the mean latency (a sanity check that the floor works, not a resu
 Order intervals are set so that the robots are busy without the pick-up area staying full
 (about one order per robot per 400 s: the lab profile's robots drive 0.12 m/s and
 take 24 s to dock). The first call compiles the kernel (cached
-afterwards): it is timed separately.
+afterwards): it is timed separately. The rows go to ``benchmarks/results/``
+(``_results.py``).
 """
 
 from __future__ import annotations
@@ -28,10 +29,11 @@ import math
 import os
 import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+from _results import begin
 
 from swarmtag.policy import Urgency
 from swarmtag.sim import Scenario, load_profile, simulate
@@ -120,7 +122,7 @@ def main() -> None:
     parser.add_argument("--cases", nargs="*", help="case names (default: all)")
     parser.add_argument("--threads", type=int, nargs="*", default=[1, 2])
     parser.add_argument("--reference-up-to", type=int, default=60, help="robots")
-    options = parser.parse_args()
+    options, record = begin(parser, __file__)
     chosen = [c for c in CASES if not options.cases or c.name in options.cases]
     with tempfile.TemporaryDirectory() as folder:
         start = time.perf_counter()
@@ -129,7 +131,8 @@ def main() -> None:
         if max(options.threads) > 1:  # one run split over threads: its own kernel calls
             split = Case("warm-split", 10_000, 1, 2, "generated")
             run(split, split.scenario(Path(folder)), "fast", 2)
-        print(f"first fast calls (compile or load kernels): {time.perf_counter() - start:.1f} s")
+        first = record.summary["first_calls_s"] = time.perf_counter() - start
+        print(f"first fast calls (compile or load kernels): {first:.1f} s")
         print(
             "case      robots runs ticks backend   thr  robot-ticks/s   s     orders "
             "delivered mean latency (s)"
@@ -147,6 +150,17 @@ def main() -> None:
                     f"{out['delivered']:9.0f} {out['latency']:8.1f}",
                     flush=True,
                 )
+                record.row(
+                    **asdict(case),
+                    backend=backend,
+                    threads=threads,
+                    seconds=out["seconds"],
+                    robot_ticks_per_s=out["rate"],
+                    orders=int(out["orders"]),
+                    delivered=int(out["delivered"]),
+                    mean_latency_s=out["latency"],
+                )
+    record.save()
 
 
 if __name__ == "__main__":

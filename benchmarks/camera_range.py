@@ -2,10 +2,12 @@
 
 Writes, into --out (default docs/perception): range.png (the figure), range.md (the
 table), range.json (every number), examples.png (crops of a few of the study's kind of
-images) and prints the reliable range next to the simulator's camera ranges. Usage:
+images) and prints the reliable range next to the simulator's camera ranges; the summary
+(reliable ranges, images, errors, wall time) with the machine's facts goes to
+benchmarks/results/ (--results FILE.json to choose; _results.py). Usage:
 
     .venv/bin/python benchmarks/camera_range.py [--rig dots-like] [--samples 40] [--seed 0]
-        [--quick]
+        [--quick] [--out DIR] [--results FILE.json]
 
 --quick: 8 samples per point on a coarse grid (a minute), for trying settings out; it
 writes into out/camera-range-quick unless --out is given, so the documented files stay.
@@ -18,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _results import begin
 
 from swarmtag.perception import (
     LOOSE_RATE,
@@ -32,7 +35,7 @@ from swarmtag.perception import (
     render,
     run_range_study,
 )
-from swarmtag.sim.profiles import PROFILES, load_profile
+from swarmtag.sim.config.profiles import PROFILES, load_profile
 
 DISTANCES = tuple(np.round(np.arange(0.5, 4.01, 0.25), 2))
 QUICK_DISTANCES = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0)
@@ -88,8 +91,8 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=40)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--out", type=Path, default=None)
-    args = parser.parse_args()
+    parser.add_argument("--out", type=Path, default=None, help="folder of the figure and table")
+    args, record = begin(parser, __file__, flag="--results")
     rig = load_rig(args.rig)
     if args.out is None:
         args.out = Path("out/camera-range-quick" if args.quick else "docs/perception")
@@ -124,6 +127,13 @@ def main() -> None:
     for rate in (MIN_RATE, LOOSE_RATE):  # the reliable range, then the looser one to compare
         band = study.reliable_range(min_rate=rate)
         images, found, worst = study.inside(min_rate=rate)
+        record.row(
+            min_rate=rate,
+            reliable_range_m=band,
+            images_inside=images,
+            identified_inside=found,
+            largest_distance_error=worst,
+        )
         print(
             f"rig {rig.name}, detection >= {rate:.0%} and every distance within 5 %: "
             f"range {band} m; inside it {found}/{images} detected, largest distance error "
@@ -142,6 +152,13 @@ def main() -> None:
     print(f"wrong ids: {int(study.wrong.sum())}")
     print("simulator camera.range:", ", ".join(f"{n} {v:g} m" for n, v in ranges.items()))
     print(f"{study.detected.size} images in {time.perf_counter() - started:.0f} s")
+    record.summary.update(
+        rig=rig.name,
+        images=int(study.detected.size),
+        wrong_ids=int(study.wrong.sum()),
+        simulator_camera_range_m=ranges,
+    )
+    record.save()
 
 
 if __name__ == "__main__":

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import importlib
+import subprocess
+import sys
 
 import pytest
 
@@ -48,3 +50,41 @@ def test_error_tree_is_rooted():
 
     for attr in errors.__all__:
         assert issubclass(getattr(errors, attr), errors.SwarmtagError)
+
+
+ENTRY_POINTS = {
+    "BUILTIN": "swarmtag.sim",
+    "Scenario": "swarmtag.sim",
+    "load_profile": "swarmtag.sim",
+    "parse_policy": "swarmtag.policy",
+    "read_event_log": "swarmtag.io",
+    "simulate": "swarmtag.sim",
+    "summarize": "swarmtag.analysis",
+}
+"""What ``import swarmtag`` offers (on first use), by home module."""
+
+
+def test_import_swarmtag_stays_light():
+    # a fresh interpreter (this one has numpy already): the entry points wait until asked for
+    script = "import sys, swarmtag; print(sorted({'numpy', 'swarmtag.sim'} & set(sys.modules)))"
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=60
+    )
+    assert done.stdout.strip() == "[]"
+
+
+@pytest.mark.parametrize(("name", "home"), sorted(ENTRY_POINTS.items()))
+def test_entry_points_are_their_home_modules_objects(name, home):
+    import swarmtag
+
+    assert name in swarmtag.__all__
+    assert name in dir(swarmtag)
+    assert getattr(swarmtag, name) is getattr(importlib.import_module(home), name)
+
+
+def test_the_top_level_offers_the_entry_points_and_the_version_only():
+    import swarmtag
+
+    assert set(swarmtag.__all__) == {*ENTRY_POINTS, "__version__"}
+    with pytest.raises(AttributeError, match="has no attribute 'nope'"):
+        _ = swarmtag.nope

@@ -7,8 +7,8 @@ start is ``w0 ~ U[0, 3000]`` (the growing urgency model), and the KPIs of
 SPEC §5 are computed exactly as ``swarmtag metrics`` does, with the
 project's own functions, for 20,000 runs per mean. This is the process
 whose delivered fractions match the published 5/10, 10/20 and 20/40
-baselines (../shared/notes/fidelity-evidence.md); it bounds what a model
-with the published latencies can give as throughput.
+baselines (docs/calibration.md); it bounds what a model with the published
+latencies can give as throughput.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmtag.calibration import CalibrationProblem, KpiTarget, Setup, Targets, parse_free
-from swarmtag.sim.profiles import load_profile
+from swarmtag.sim.config.profiles import load_profile
 
 DATA = Path(__file__).parent / "data"
 SMALL_TARGETS = DATA / "small-targets.toml"

@@ -14,7 +14,7 @@ from swarmtag.cli import main
 from swarmtag.data import example_trial_path
 from swarmtag.policy import parse_policy
 from swarmtag.sim import simulate
-from swarmtag.sim.profiles import read_profile_file
+from swarmtag.sim.config.profiles import read_profile_file
 from tests.calibration.helpers import SMALL_TARGETS
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from swarmtag.calibration import CalibrationProblem, parse_free
 from swarmtag.errors import CalibrationError
-from swarmtag.sim.profiles import load_profile
+from swarmtag.sim.config.profiles import load_profile
 from tests.calibration.helpers import tiny_problem, tiny_setup, tiny_targets
 
 

@@ -8,7 +8,7 @@ import tomllib
 import pytest
 
 from swarmtag.errors import ConfigError
-from swarmtag.sim.profiles import (
+from swarmtag.sim.config.profiles import (
     PROFILES,
     load_profile,
     profile_path,

@@ -9,7 +9,7 @@ import pytest
 from swarmtag.calibration import TARGETS, target_path
 from swarmtag.calibration.spec import file_digest
 from swarmtag.sim import load_profile
-from swarmtag.sim._mapping import flat_keys
+from swarmtag.sim.config.mapping import flat_keys
 
 
 @pytest.mark.parametrize("name", ["paper-sim", "lab"])
@@ -27,4 +27,4 @@ def test_a_shipped_profile_records_its_calibration_on_the_shipped_targets(name):
         assert values[key] == value
     command = shlex.split(record["command"])
     assert command[:4] == ["swarmtag", "calibrate", "--baseline", name]
-    assert f"src/swarmtag/sim/presets/{name}.toml" in command
+    assert f"src/swarmtag/sim/config/presets/{name}.toml" in command

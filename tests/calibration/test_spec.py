@@ -21,7 +21,7 @@ from swarmtag.calibration import (
 )
 from swarmtag.calibration.problem import CalibrationProblem
 from swarmtag.errors import CalibrationError
-from swarmtag.sim.profiles import PROFILES, load_profile, profile_path
+from swarmtag.sim.config.profiles import PROFILES, load_profile, profile_path
 from tests.calibration.helpers import SMALL_TARGETS
 
 GOOD = """

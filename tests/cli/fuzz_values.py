@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from swarmtag.calibration.fit import MAX_EVALUATIONS
 from swarmtag.data import example_trial_path
 from swarmtag.sim import Scenario
-from swarmtag.sim._mapping import flat_keys
+from swarmtag.sim.config.mapping import flat_keys
 from tests.cli.fuzz_files import (
     TINY_STUDY,
     TINY_TARGETS,

@@ -64,7 +64,7 @@ from swarmtag.calibration import default_cache_path
 from swarmtag.cli import main
 from swarmtag.cli._main import app
 from swarmtag.data import example_trial_path
-from swarmtag.sim.profiles import profile_path
+from swarmtag.sim.config.profiles import profile_path
 from tests.cli.fuzz_files import (
     TINY_SCENARIO,
     TINY_STUDY,
@@ -158,7 +158,7 @@ def templates(tmp_path_factory) -> dict[str, Path]:
     from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
     from swarmtag.policy import Proximity, Urgency
     from swarmtag.sim import simulate
-    from swarmtag.sim.profiles import load_profile
+    from swarmtag.sim.config.profiles import load_profile
 
     folder = tmp_path_factory.mktemp("fuzz-templates")
     scenario = load_profile("base").scenario({"robots": 2, "carriers": 3, "ticks": 300})

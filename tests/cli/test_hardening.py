@@ -183,7 +183,7 @@ def test_figures_never_create_missing_parents(tmp_path, capsys):
 
 
 def test_a_calibrated_profile_may_not_overwrite_its_base_profile(tmp_path, capsys):
-    from swarmtag.sim import profiles
+    from swarmtag.sim.config import profiles
 
     base = tmp_path / "mine.toml"
     base.write_bytes((Path(profiles.__file__).parent / "presets" / "paper-sim.toml").read_bytes())

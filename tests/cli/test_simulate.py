@@ -163,7 +163,7 @@ def test_trajectories_saved_for_replay_match_a_recorded_run(capsys, tmp_path):
 
     from swarmtag.policy import Urgency
     from swarmtag.sim import Scenario, Trajectories, simulate
-    from swarmtag.sim.render import snapshot
+    from swarmtag.sim.outputs.render import snapshot
 
     path = tmp_path / "run.npz"
     code, out, _ = run(

@@ -22,7 +22,7 @@ from swarmtag.perception import (
     render,
     visible_markers,
 )
-from swarmtag.sim.scenario import Motion
+from swarmtag.sim.config.scenario import Motion
 
 pytest.importorskip("cv2")
 

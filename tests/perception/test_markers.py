@@ -23,7 +23,7 @@ from swarmtag.perception import (
 )
 from swarmtag.perception._bits import read_candidate
 from swarmtag.perception.markers import BORDER_PIXELS, _detector
-from swarmtag.sim.geometry import FACE_NORMALS
+from swarmtag.sim.model.geometry import FACE_NORMALS
 
 pytest.importorskip("cv2")
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 from swarmtag.policy import Policy
-from swarmtag.sim import Scenario, run_csv, simulate
+from swarmtag.sim import Scenario, simulate
+from swarmtag.sim.checks import run_csv
 
 REALISM = {
     "advertisement_loss": 0.3,

@@ -16,11 +16,11 @@ from swarmtag.sim import (
     SimResult,
     TickInputs,
     WorldState,
-    due_writes,
     initial_state,
     make_params,
     run_batch,
 )
+from swarmtag.sim.model.randomness import due_writes
 
 
 def params_for(policy: Policy | None = None, **scenario: object) -> Params:

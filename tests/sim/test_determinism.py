@@ -19,9 +19,9 @@ from swarmtag.sim import (
     Walk,
     check_common_scenes,
     check_determinism,
-    run_csv,
     simulate,
 )
+from swarmtag.sim.checks import run_csv
 
 SCENARIO = Scenario(
     ticks=500,
@@ -47,7 +47,8 @@ def test_any_batch_gives_the_same_rows_for_a_run():
 _CHILD = """
 import hashlib, sys
 from swarmtag.policy import Proximity
-from swarmtag.sim import Realism, Reprioritisation, Scenario, run_csv, simulate
+from swarmtag.sim import Realism, Reprioritisation, Scenario, simulate
+from swarmtag.sim.checks import run_csv
 scenario = Scenario(
     ticks=500,
     detection_radius=2.0,

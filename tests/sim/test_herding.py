@@ -15,7 +15,7 @@ import pytest
 
 from swarmtag.policy import Proximity, Urgency
 from swarmtag.sim import Scene, make_params, simulate
-from swarmtag.sim.profiles import load_profile
+from swarmtag.sim.config.profiles import load_profile
 from tests.sim.helpers import event_rows, run_script
 
 

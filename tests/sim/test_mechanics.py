@@ -217,7 +217,7 @@ def test_timed_reprioritisation_changes_the_selection():
 
 
 def test_reprioritisation_goes_through_the_authenticated_operator_write(monkeypatch):
-    from swarmtag.sim import wms
+    from swarmtag.sim.world import wms
     from swarmtag.tag import Role, TagModel, verify
 
     applied = []

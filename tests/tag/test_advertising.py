@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 
 from swarmtag.policy import Proximity
 from swarmtag.sim import Scenario, make_params
-from swarmtag.sim.sense import advertising
-from swarmtag.sim.sensors import Radio
+from swarmtag.sim.config.sensors import Radio
+from swarmtag.sim.world.sensing import advertising
 from swarmtag.tag import TagState, TagStatus
 from swarmtag.tag.advertising import (
     advert_times,

@@ -25,7 +25,7 @@ from swarmtag.calibration.evaluate import Evaluation, Evaluator
 from swarmtag.calibration.problem import CalibrationProblem
 from swarmtag.calibration.search import SearchResult, search
 from swarmtag.errors import CalibrationError
-from swarmtag.sim.profiles import Profile
+from swarmtag.sim.config.profiles import Profile
 
 __all__ = [
     "DEFAULT_EVALUATIONS",

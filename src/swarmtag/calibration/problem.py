@@ -25,8 +25,8 @@ from swarmtag.calibration.spec import MAX_RUNS, Setup, Targets
 from swarmtag.errors import CalibrationError, ConfigError
 from swarmtag.experiments.spec import model_digest
 from swarmtag.sim import Scenario
-from swarmtag.sim._mapping import flat_keys, merge_layers
-from swarmtag.sim.profiles import Profile
+from swarmtag.sim.config.mapping import flat_keys, merge_layers
+from swarmtag.sim.config.profiles import Profile
 
 __all__ = ["CACHE_FORMAT", "CalibrationProblem"]
 

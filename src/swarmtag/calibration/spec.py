@@ -24,7 +24,7 @@ from swarmtag._toml import read_toml
 from swarmtag.analysis import kpis as _kpis
 from swarmtag.errors import CalibrationError, ConfigError, SwarmtagError
 from swarmtag.policy import parse_policy
-from swarmtag.sim._mapping import scenario_fields
+from swarmtag.sim.config.mapping import scenario_fields
 
 __all__ = [
     "COUNT_KPIS",

@@ -17,10 +17,10 @@ import click
 
 from swarmtag.errors import ConfigError
 from swarmtag.sim import Scenario
-from swarmtag.sim._mapping import load_toml
-from swarmtag.sim.profiles import DEFAULT_PROFILE, load_profile
-from swarmtag.sim.runner import BACKENDS
-from swarmtag.sim.sensors import OCCLUSION_MODELS, PERCEPTION_MODELS
+from swarmtag.sim.backends import BACKENDS
+from swarmtag.sim.config.mapping import load_toml
+from swarmtag.sim.config.profiles import DEFAULT_PROFILE, load_profile
+from swarmtag.sim.config.sensors import OCCLUSION_MODELS, PERCEPTION_MODELS
 
 __all__ = [
     "SCENARIO_FLAGS",
@@ -51,7 +51,7 @@ SCENARIO_FLAGS: Final = {
 
 backend_option = click.option(
     "--backend",
-    type=click.Choice(BACKENDS),
+    type=click.Choice(tuple(BACKENDS)),
     default=None,
     help="Simulation backend: the numpy reference kernel, or the compiled kernel (numba, the "
     "fast extra; the same results) [default: fast where numba is installed].",

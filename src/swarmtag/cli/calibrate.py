@@ -46,7 +46,7 @@ from swarmtag.calibration.report import format_number, summary_line
 from swarmtag.cli._console import make_console
 from swarmtag.cli._scenario import parse_set
 from swarmtag.errors import CalibrationError
-from swarmtag.sim.profiles import DEFAULT_PROFILE, load_profile, write_profile_file
+from swarmtag.sim.config.profiles import DEFAULT_PROFILE, load_profile, write_profile_file
 
 __all__ = ["calibrate_cmd", "command_line"]
 

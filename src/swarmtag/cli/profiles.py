@@ -8,8 +8,8 @@ import click
 from rich.table import Table
 
 from swarmtag.cli._console import make_console
-from swarmtag.sim._mapping import flat_keys
-from swarmtag.sim.profiles import DEFAULT_PROFILE, PROFILES, Profile, load_profile
+from swarmtag.sim.config.mapping import flat_keys
+from swarmtag.sim.config.profiles import DEFAULT_PROFILE, PROFILES, Profile, load_profile
 
 __all__ = ["profiles_cmd"]
 

@@ -29,12 +29,8 @@ from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_tab
 from swarmtag.io.ros_types import require_rosbags
 from swarmtag.policy import Policy, Proximity, Urgency, Weighted, parse_policy
 from swarmtag.sim import Scenario, simulate
-from swarmtag.sim.runner import (
-    CONTROLLERS,
-    LOG_BYTES_PER_CARRIER,
-    batch_memory,
-    resolve_backend,
-)
+from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER, batch_memory
+from swarmtag.sim.simulation import backend_for
 
 __all__ = ["DEFAULT_CONDITIONS", "run_conditions", "simulate_cmd"]
 
@@ -180,7 +176,7 @@ def _draw(
     backend: str | None,
 ) -> list[str]:
     """Re-run ``run`` of each condition recording it; draw and save it; say what was written."""
-    from swarmtag.sim.render import animate, snapshot  # noqa: PLC0415 - matplotlib is an extra
+    from swarmtag.sim.outputs.render import animate, snapshot  # noqa: PLC0415 - matplotlib is an extra
 
     written = []
     several = len(policies) > 1
@@ -212,7 +208,7 @@ def _draw(
                 f"trajectories of {policy.name} run {run} ({traj.ticks} ticks): {target}"
             )
         if mcap_path is not None:
-            from swarmtag.sim.mcap import write_mcap  # noqa: PLC0415 - rosbags is an extra
+            from swarmtag.sim.outputs.mcap import write_mcap  # noqa: PLC0415 - rosbags is an extra
 
             target = _per_condition(mcap_path, policy, several)
             ticks = write_mcap(stage.path(target), traj, result.carriers, result.events, run=run)
@@ -289,11 +285,11 @@ def _draw(
 )
 @click.option(
     "--controller",
-    type=click.Choice(CONTROLLERS),
     default="builtin",
     show_default=True,
-    help="Who decides for the robots: the vectorised built-in controller, or a behaviour "
-    "tree per robot (bt; the robot extra). Both give the same event logs.",
+    help="Who decides for the robots: builtin (the vectorised built-in controller), bt (a "
+    "behaviour tree per robot; the robot extra), or a controller a package registers under "
+    "the swarmtag.controllers entry point. All give the same event logs.",
 )
 @backend_option
 @baseline_option
@@ -359,7 +355,7 @@ def simulate_cmd(
     if mcap is not None:
         require_rosbags()  # the missing extra is named before any work
     recorded = any(path is not None for path in drawn)
-    resolved = resolve_backend(backend, controller=controller)
+    resolved = backend_for(controller, backend).name
     _check_work(scenario, len(policies), runs, run_offset, record=recorded, backend=resolved)
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()
@@ -416,7 +412,7 @@ def simulate_cmd(
         f"{scenario.run_ticks} ticks of {scenario.tick:g} s ({scenario.urgency.model} urgency), "
         f"{scenario.perception_summary()}, profile {profile}, {runs} runs "
         f"from run {run_offset}, seed {seed}"
-        + (", behaviour-tree controller" if controller == "bt" else "")
+        + ("" if controller == "builtin" else f", {controller} controller")
         + "\n"
     )
     render_report(report, console)

@@ -14,7 +14,7 @@ from swarmtag._checks import MAX_RESAMPLES, MAX_WORKERS
 from swarmtag._inputs import check_path
 from swarmtag.cli._scenario import backend_option, note_compilation
 from swarmtag.errors import ConfigError, StudyError
-from swarmtag.sim.runner import resolve_backend
+from swarmtag.sim.backends import resolve_backend
 
 __all__ = ["reproduce", "study"]
 
@@ -101,7 +101,7 @@ def _note(backends: Iterable[str | None], scheduler: str | None) -> None:
     """
     if scheduler is None:
         try:
-            resolved = {resolve_backend(backend) for backend in backends}
+            resolved = {resolve_backend(backend).name for backend in backends}
         except ConfigError as error:
             raise StudyError(str(error)) from None
         for name in sorted(resolved):

@@ -43,7 +43,8 @@ from swarmtag.experiments.execute import run_dask, run_local
 from swarmtag.experiments.spec import Scale, Study
 from swarmtag.experiments.store import ResultsStore, RunKey
 from swarmtag.io import CarrierLog
-from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER, resolve_backend
+from swarmtag.sim.backends import resolve_backend
+from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER
 
 __all__ = [
     "QUICK_RESAMPLES",
@@ -237,7 +238,7 @@ def _execution(
     """
     chosen = study.backend if backend is None else backend
     try:
-        resolved = resolve_backend(chosen)
+        resolved = resolve_backend(chosen).name
     except ConfigError as error:
         raise StudyError(str(error)) from None
     if scheduler is not None:

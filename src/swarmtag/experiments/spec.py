@@ -53,9 +53,9 @@ from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError, PolicyError, StudyError
 from swarmtag.policy import Policy, parse_policy
 from swarmtag.sim import Scenario
-from swarmtag.sim.groups import MAX_TICKS
-from swarmtag.sim.profiles import DEFAULT_PROFILE, Profile, load_profile
-from swarmtag.sim.runner import BACKENDS
+from swarmtag.sim.backends import BACKENDS
+from swarmtag.sim.config.parts import MAX_TICKS
+from swarmtag.sim.config.profiles import DEFAULT_PROFILE, Profile, load_profile
 
 __all__ = ["DEFAULT_SCALE", "URGENCY_MODELS", "Scale", "Study", "read_study_file"]
 

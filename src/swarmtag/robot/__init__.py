@@ -8,6 +8,7 @@
   ``tag_states`` sensor (``swarmtag.robot.tag_cache``);
 - ``create_tree`` and the subtree factories (py_trees, the ``robot``
   extra): SPEC §3.2 as a behaviour tree;
+- ``SimRobotIO``: one simulated robot through ``RobotIO`` (the simulator's view);
 - ``TreeController``: every simulated robot under its own tree
   (``simulate(..., controller="bt")``);
 - ``check_controller``: a conformance check against the built-in controller.
@@ -34,9 +35,10 @@ from swarmtag.robot.io import (
 from swarmtag.robot.tag_cache import TagCache, tag_states
 
 if TYPE_CHECKING:
-    from swarmtag.robot.conformance import Divergence, check_controller
     from swarmtag.robot.sil import TreeController, TreeFactory
+    from swarmtag.robot.sim_io import SimRobotIO, StepContext
     from swarmtag.robot.tree import ascii_picture, create_tree, dot_picture
+    from swarmtag.sim.conformance import Divergence, check_controller
 
 __all__ = [
     "Behaviour",
@@ -48,6 +50,8 @@ __all__ = [
     "RandomDraws",
     "Report",
     "RobotIO",
+    "SimRobotIO",
+    "StepContext",
     "TagCache",
     "TagStates",
     "TreeController",
@@ -60,8 +64,10 @@ __all__ = [
 ]
 
 _LAZY = {
-    "Divergence": "swarmtag.robot.conformance",
-    "check_controller": "swarmtag.robot.conformance",
+    "Divergence": "swarmtag.sim.conformance",
+    "check_controller": "swarmtag.sim.conformance",
+    "SimRobotIO": "swarmtag.robot.sim_io",
+    "StepContext": "swarmtag.robot.sim_io",
     "TreeController": "swarmtag.robot.sil",
     "TreeFactory": "swarmtag.robot.sil",
     "ascii_picture": "swarmtag.robot.tree",

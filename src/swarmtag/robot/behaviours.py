@@ -19,10 +19,9 @@ from py_trees.common import Access, Status
 from swarmtag.policy import select
 from swarmtag.robot.config import ControllerConfig
 from swarmtag.robot.io import ControlStep, Float, Report, RobotIO
-from swarmtag.sim.decide import away_from
-from swarmtag.sim.docking import STUCK_PROGRESS
-from swarmtag.sim.geometry import FACE_NORMALS, length
-from swarmtag.sim.predock import nearest_free_face, taken_faces
+from swarmtag.sim.control.rules import STUCK_PROGRESS, away_from
+from swarmtag.sim.model.geometry import FACE_NORMALS, length
+from swarmtag.sim.world.predock import nearest_free_face, taken_faces
 from swarmtag.tag import TagStatus
 
 __all__ = [
@@ -127,7 +126,11 @@ def _taken(io: RobotIO, centre: Float, config: ControllerConfig) -> np.ndarray:
     bodies = np.concatenate((io.pose().position[None, :], io.neighbours()))[None]
     centres = np.broadcast_to(centre, bodies.shape).copy()
     taken = taken_faces(
-        bodies, centres, config.predock_offset, body=2 * config.robot_radius, sight=config.sight
+        bodies,
+        centres,
+        config.predock_offset,
+        body=2 * config.robot_radius,
+        sight=config.detection_radius,
     )
     return np.asarray(taken[0, 0])
 

@@ -2,7 +2,7 @@
 
 A controller (the behaviour tree of ``swarmtag.robot.tree``, or any other)
 sees its robot only through ``RobotIO``; the simulator offers one view per
-simulated robot (``swarmtag.sim.robot_view``), and a real robot would offer
+simulated robot (``swarmtag.robot.sim_io``), and a real robot would offer
 the same from its drivers (docs/controller.md says what a ROS 2 node has to
 provide). Carriers are indexed by marker id throughout.
 

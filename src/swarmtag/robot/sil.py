@@ -1,6 +1,6 @@
 """Software-in-the-loop: every simulated robot runs its own behaviour tree.
 
-``TreeController`` is a ``swarmtag.sim.control.Controller``: at each control
+``TreeController`` is a ``swarmtag.sim.control.interface.Controller``: at each control
 step it binds each robot's ``SimRobotIO`` view to the step and ticks the
 robot's tree, robots of a run in id order (a robot sees the behaviour the
 smaller ids announced in the same step, as its range sensors would), runs
@@ -21,14 +21,14 @@ import py_trees
 
 from swarmtag.robot.config import ControllerConfig
 from swarmtag.robot.io import ControlStep, Report
+from swarmtag.robot.sim_io import SimRobotIO, StepContext
 from swarmtag.robot.tree import create_tree, initialise_memory
-from swarmtag.sim.control import Arrivals, Carrying, LiftAnswers
-from swarmtag.sim.events import EventKind, TickEvents
-from swarmtag.sim.params import Params
-from swarmtag.sim.randomness import TickInputs
-from swarmtag.sim.robot_view import SimRobotIO, StepContext
-from swarmtag.sim.sense import Senses
-from swarmtag.sim.state import Mode, WorldState
+from swarmtag.sim.control.interface import Arrivals, Carrying, LiftAnswers
+from swarmtag.sim.model.events import EventKind, TickEvents
+from swarmtag.sim.model.params import Params
+from swarmtag.sim.model.randomness import TickInputs
+from swarmtag.sim.model.state import Mode, WorldState
+from swarmtag.sim.world.sensing import Senses
 
 __all__ = ["TreeController", "TreeFactory"]
 

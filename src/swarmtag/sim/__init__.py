@@ -10,37 +10,48 @@ Start with ``simulate``::
     result.carriers      # swarmtag.io.CarrierLog, one row per carrier per run
     result.events        # swarmtag.io.EventTable: selections, lifts, deliveries, ...
 
-The layers underneath, for other front ends and for tests:
+What this package exports:
 
-- ``Scenario`` (frozen, validated; TOML and mappings) and its parts;
-- profiles (``load_profile``, ``Profile``): named presets of the free parameters;
+- ``simulate`` -> ``SimResult``; ``Scenario`` (frozen, validated; TOML and
+  mappings) and its parts (``Arena``, ``Bodies``, ``Motion``, ``Walk``,
+  ``Radio``, ``Camera``, ``Timing``, ``UrgencyModel``, ``Realism``,
+  ``Reprioritisation``, ``Warehouse``);
+- profiles (``load_profile``, ``Profile``, ``PROFILES``, ``DEFAULT_PROFILE``):
+  named presets of the free parameters;
+- controllers: the ``Controller`` protocol with the step records one
+  implementing it sees (``Arrivals``, ``LiftAnswers``, ``Carrying``), and the
+  vectorised built-in one (``BUILTIN``, a ``BuiltinController``); per-robot
+  controllers such as ``swarmtag.robot``'s tree see one robot through
+  ``swarmtag.robot.SimRobotIO``;
+- backends: ``Backend``, the protocol ``simulate(..., backend=)`` takes, and
+  the shipped ``REFERENCE`` (numpy) and ``FAST`` (numba) ones;
+- checks anyone can run on their own scenarios and controllers:
+  ``check_determinism``, ``check_common_scenes``, ``check_controller`` (its
+  finding: a ``Divergence``).
+
+For other front ends and for tests, the layers underneath:
+
 - ``make_params`` -> ``Params``: the scenario and policy in kernel units;
-- ``sample_scene`` / ``Scene`` / ``initial_state`` -> ``WorldState``;
+- ``sample_scene`` / ``Scene`` / ``initial_state`` -> ``WorldState`` (robots in a ``Mode``);
 - ``RandomSource`` -> ``TickInputs``: the per-tick random numbers of SPEC §4.5;
 - ``step(state, inputs, params, controller=BUILTIN) -> (state, TickEvents)``:
-  the pure kernel; the world's phases around a ``Controller``'s three steps
-  (``BUILTIN``: the vectorised built-in controller; ``SimRobotIO``: one
-  robot's view for a per-robot controller such as ``swarmtag.robot``'s tree);
-- ``run_batch``: the loop, event logs, trajectories, invariant checking;
-- ``check_determinism`` / ``check_common_scenes``: checks anyone can run.
+  the pure kernel (events by ``EventKind``);
+- ``run_batch``: the loop, event logs, ``Trajectories`` (with their
+  ``Geometry``), invariant checking.
 
+Everything else (random-stream layout, invariants, controller memory fields,
+the world's phases, the compiled kernel) is imported from its module:
+``swarmtag.sim.model``, ``swarmtag.sim.world``, ``swarmtag.sim.control``,
+``swarmtag.sim.runner``, ``swarmtag.sim.checks``, ``swarmtag.sim.fast``.
 See docs/simulator.md for the model, the defaults and the random-stream layout.
 """
 
 from __future__ import annotations
 
-from swarmtag.sim.builtin import BUILTIN, BuiltinController
-from swarmtag.sim.checks import check_common_scenes, check_determinism, run_csv
-from swarmtag.sim.control import (
-    COMMAND_FIELDS,
-    MEMORY_FIELDS,
-    Arrivals,
-    Carrying,
-    Controller,
-    LiftAnswers,
-)
-from swarmtag.sim.events import EventKind, TickEvents
-from swarmtag.sim.groups import (
+from swarmtag.sim.backends import FAST, REFERENCE, Backend
+from swarmtag.sim.builtin.controller import BUILTIN, BuiltinController
+from swarmtag.sim.checks import check_common_scenes, check_determinism
+from swarmtag.sim.config.parts import (
     Arena,
     Bodies,
     Motion,
@@ -50,44 +61,39 @@ from swarmtag.sim.groups import (
     UrgencyModel,
     Walk,
 )
-from swarmtag.sim.invariants import OVERLAP_TOLERANCE, check_tick
-from swarmtag.sim.kernel import step
-from swarmtag.sim.params import Params, make_params
-from swarmtag.sim.profiles import DEFAULT_PROFILE, PROFILES, Profile, load_profile
-from swarmtag.sim.randomness import RandomSource, Stream, TickInputs, due_writes, stream
-from swarmtag.sim.robot_view import SimRobotIO, StepContext
-from swarmtag.sim.runner import (
-    CONTROLLERS,
-    InputSource,
-    SimResult,
-    run_batch,
-    seeded_state,
-    simulate,
-)
-from swarmtag.sim.scenario import Scenario
-from swarmtag.sim.scene import sample_scene
-from swarmtag.sim.sensors import Camera, Radio
-from swarmtag.sim.state import Mode, Scene, WorldState, initial_state
-from swarmtag.sim.trajectories import Geometry, Trajectories
+from swarmtag.sim.config.profiles import DEFAULT_PROFILE, PROFILES, Profile, load_profile
+from swarmtag.sim.config.scenario import Scenario
+from swarmtag.sim.config.sensors import Camera, Radio
+from swarmtag.sim.config.warehouse import Warehouse
+from swarmtag.sim.conformance import Divergence, check_controller
+from swarmtag.sim.control.interface import Arrivals, Carrying, Controller, LiftAnswers
+from swarmtag.sim.model.events import EventKind, TickEvents
+from swarmtag.sim.model.params import Params, make_params
+from swarmtag.sim.model.randomness import RandomSource, TickInputs
+from swarmtag.sim.model.scene import sample_scene
+from swarmtag.sim.model.state import Mode, Scene, WorldState, initial_state
+from swarmtag.sim.model.step import step
+from swarmtag.sim.outputs.trajectories import Geometry, Trajectories
+from swarmtag.sim.runner import SimResult, run_batch
+from swarmtag.sim.simulation import simulate
 
 __all__ = [
     "BUILTIN",
-    "COMMAND_FIELDS",
-    "CONTROLLERS",
     "DEFAULT_PROFILE",
-    "MEMORY_FIELDS",
-    "OVERLAP_TOLERANCE",
+    "FAST",
     "PROFILES",
+    "REFERENCE",
     "Arena",
     "Arrivals",
+    "Backend",
     "Bodies",
     "BuiltinController",
     "Camera",
     "Carrying",
     "Controller",
+    "Divergence",
     "EventKind",
     "Geometry",
-    "InputSource",
     "LiftAnswers",
     "Mode",
     "Motion",
@@ -100,28 +106,22 @@ __all__ = [
     "Scenario",
     "Scene",
     "SimResult",
-    "SimRobotIO",
-    "StepContext",
-    "Stream",
     "TickEvents",
     "TickInputs",
     "Timing",
     "Trajectories",
     "UrgencyModel",
     "Walk",
+    "Warehouse",
     "WorldState",
     "check_common_scenes",
+    "check_controller",
     "check_determinism",
-    "check_tick",
-    "due_writes",
     "initial_state",
     "load_profile",
     "make_params",
     "run_batch",
-    "run_csv",
     "sample_scene",
-    "seeded_state",
     "simulate",
     "step",
-    "stream",
 ]

@@ -17,9 +17,10 @@ import numpy as np
 from swarmtag.errors import DeterminismError
 from swarmtag.io import format_csv
 from swarmtag.policy import Policy
-from swarmtag.sim.params import make_params
-from swarmtag.sim.runner import SimResult, seeded_state, simulate
-from swarmtag.sim.scenario import Scenario
+from swarmtag.sim.config.scenario import Scenario
+from swarmtag.sim.model.params import make_params
+from swarmtag.sim.runner import SimResult, seeded_state
+from swarmtag.sim.simulation import simulate
 
 __all__ = ["check_common_scenes", "check_determinism", "run_csv"]
 

@@ -1,4 +1,4 @@
-"""Running batches: ``simulate`` (seeded runs) and ``run_batch`` (any start state and inputs).
+"""Running batches: ``run_batch`` (any start state and inputs), seeded starts, results.
 
 The thin stateful wrapper around the pure kernel: it draws the scenes and
 the per-tick random inputs (and the operator's scheduled writes), steps the
@@ -9,45 +9,37 @@ the event logs of SPEC §8.1.
 
 from __future__ import annotations
 
-import importlib.util
 from dataclasses import dataclass
 from typing import Final, Protocol
 
 import numpy as np
 
-from swarmtag._checks import MAX_RUN_INDEX, check_choice, check_int
+from swarmtag._checks import MAX_RUN_INDEX, check_int
 from swarmtag._interrupt import checkpoint
-from swarmtag._resources import check_memory
-from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable
-from swarmtag.policy import Policy
-from swarmtag.sim.broad_phase import grid_pays
-from swarmtag.sim.builtin import BUILTIN
-from swarmtag.sim.control import Controller
-from swarmtag.sim.events import EventKind, EventRecorder
-from swarmtag.sim.invariants import check_tick
-from swarmtag.sim.kernel import step
-from swarmtag.sim.params import FIRST_CACHE_CAPACITY, Params, make_params, sparse_tag_cache
-from swarmtag.sim.randomness import RandomSource, TickInputs, check_seed
-from swarmtag.sim.scenario import Scenario
-from swarmtag.sim.scene import sample_scene
-from swarmtag.sim.state import Int, Mode, WorldState, initial_state
-from swarmtag.sim.trajectories import Trajectories, TrajectoryRecorder
+from swarmtag.sim.builtin.controller import BUILTIN
+from swarmtag.sim.config.scenario import Scenario
+from swarmtag.sim.control.interface import Controller
+from swarmtag.sim.model.events import EventKind, EventRecorder
+from swarmtag.sim.model.invariants import check_tick
+from swarmtag.sim.model.params import FIRST_CACHE_CAPACITY, Params, sparse_tag_cache
+from swarmtag.sim.model.randomness import TickInputs, check_seed
+from swarmtag.sim.model.scene import sample_scene
+from swarmtag.sim.model.state import Int, Mode, WorldState, initial_state
+from swarmtag.sim.model.step import step
+from swarmtag.sim.outputs.trajectories import Trajectories, TrajectoryRecorder
+from swarmtag.sim.world.broad_phase import grid_pays
 from swarmtag.tag import TagStatus
 
 __all__ = [
-    "BACKENDS",
-    "CONTROLLERS",
     "LOG_BYTES_PER_CARRIER",
     "InputSource",
     "SimResult",
     "batch_memory",
+    "batch_result",
     "carrier_log",
-    "fast_available",
-    "resolve_backend",
     "run_batch",
     "seeded_state",
-    "simulate",
 ]
 
 
@@ -139,8 +131,8 @@ def run_batch(
     """Step ``state`` until every run has ended, or for ``ticks`` ticks at most.
 
     ``seed`` is only written into the logs. ``check=True`` verifies the
-    invariants of ``swarmtag.sim.invariants`` after every tick.
-    ``controller`` decides for the robots (``swarmtag.sim.control``).
+    invariants of ``swarmtag.sim.model.invariants`` after every tick.
+    ``controller`` decides for the robots (``swarmtag.sim.control.interface``).
     """
     limit = params.run_ticks - state.tick if ticks is None else check_int("ticks", ticks, low=0)
     events = EventRecorder()
@@ -159,12 +151,12 @@ def run_batch(
         if recorder is not None:
             recorder.add(after)
         state = after
-    return _result(
+    return batch_result(
         state, params, seed=seed, events=events, breakdowns=breakdowns, recorder=recorder
     )
 
 
-def _result(
+def batch_result(
     state: WorldState,
     params: Params,
     *,
@@ -200,84 +192,6 @@ def _result(
         final_state=state,
         trajectories=None if recorder is None else recorder.finish(params, seed=seed, last=state),
     )
-
-
-def _simulate_fast(
-    scenario: Scenario,
-    params: Params,
-    *,
-    seed: int,
-    runs: int,
-    run_offset: int,
-    record: bool,
-    check: bool,
-    threads: int | None,
-) -> SimResult:
-    """``simulate`` on the compiled backend.
-
-    A batch whose sparse tag caches overflow (``sim/fast/_tag_cache.py``)
-    starts again from its seeded start with twice the room (if it fits in
-    memory): the same bytes.
-    """
-    from swarmtag.sim.fast import TagCacheFull, simulate_fast  # noqa: PLC0415 - numba is an extra
-
-    capacity = None
-    while True:
-        state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset, backend="fast")
-        try:
-            final, events, breakdowns, recorder = simulate_fast(
-                state, params, seed=seed, record=record, check=check, threads=threads,
-                adopt=True, cache_capacity=capacity,
-            )  # fmt: skip
-        except TagCacheFull as full:
-            capacity = full.capacity
-            need = batch_memory(
-                scenario, runs, record=record, backend="fast", cache_capacity=capacity
-            )
-            what = f"{runs} runs of {params.robots} robots with {capacity} tag cache entries each"
-            check_memory(what, need, error=ConfigError)
-            continue
-        return _result(
-            final, params, seed=seed, events=events, breakdowns=breakdowns, recorder=recorder
-        )
-
-
-CONTROLLERS: Final = ("builtin", "bt")
-"""Controllers ``simulate`` can run: the vectorised built-in one, the behaviour trees."""
-MAX_THREADS: Final = 1024
-"""Most threads the compiled backend is asked to use."""
-BACKENDS: Final = ("reference", "fast")
-"""Simulation backends: the numpy reference kernel, the compiled kernel (numba, ``fast`` extra)."""
-
-
-def fast_available() -> bool:
-    """Whether the compiled backend can run here (numba is installed)."""
-    return importlib.util.find_spec("numba") is not None
-
-
-def resolve_backend(backend: str | None, *, controller: str = "builtin") -> str:
-    """The backend to run: ``backend`` checked, or the default when it is ``None``.
-
-    The default is ``fast`` where numba is installed and ``reference``
-    otherwise (the two give the same bytes); the behaviour-tree controller
-    runs on the reference world only.
-    """
-    if backend is None:
-        return "fast" if controller == "builtin" and fast_available() else "reference"
-    backend = check_choice("backend", backend, BACKENDS)
-    if backend == "fast":
-        if controller != "builtin":
-            msg = (
-                f"backend: 'fast' runs the built-in controller only; the {controller!r} "
-                "controller runs on the reference backend"
-            )
-            raise ConfigError(msg)
-        if not fast_available():
-            msg = (
-                "backend: 'fast' needs numba (install the fast extra: pip install 'swarmtag[fast]')"
-            )
-            raise ConfigError(msg)
-    return backend
 
 
 LOG_BYTES_PER_CARRIER: Final = 2200
@@ -353,7 +267,7 @@ def seeded_state(
     runs = check_int("runs", runs, low=1, high=MAX_RUN_INDEX)
     run_offset = check_int("run_offset", run_offset, low=0, high=MAX_RUN_INDEX - runs)
     run_ids = np.arange(run_offset, run_offset + runs, dtype=np.int64)
-    if check_choice("backend", backend, BACKENDS) == "fast" and params.floor is None:
+    if backend == "fast" and params.floor is None:
         from swarmtag.sim.fast import seeded_scenes  # noqa: PLC0415 - numba is an extra
 
         scenes = seeded_scenes(params, seed=seed, run_ids=run_ids.tolist())
@@ -361,74 +275,3 @@ def seeded_state(
         scenes = [sample_scene(params, seed=seed, run=int(run)) for run in run_ids]
     sparse = backend == "fast" and params.sparse_tag_cache
     return initial_state(params, scenes, run_ids, dense_caches=not sparse)
-
-
-def simulate(
-    scenario: Scenario,
-    policy: Policy,
-    *,
-    seed: int,
-    runs: int,
-    run_offset: int = 0,
-    record: bool = False,
-    check: bool = False,
-    controller: str = "builtin",
-    backend: str | None = None,
-    threads: int | None = None,
-) -> SimResult:
-    """Simulate runs ``run_offset ..`` of master ``seed`` under ``policy`` (SPEC §4).
-
-    Run ``i`` is a pure function of (scenario, policy, seed, i): the same rows
-    alone or in any batch. ``record=True`` keeps per-tick trajectories;
-    ``check=True`` verifies the world invariants every tick (slower).
-    ``controller``: ``"builtin"`` (vectorised, the default) or ``"bt"`` (each
-    robot under its own behaviour tree, ``swarmtag.robot``; same event logs).
-    ``backend``: ``"reference"`` (numpy) or ``"fast"`` (compiled with numba;
-    the same bytes); ``None`` picks ``fast`` where numba is installed.
-    ``threads``: threads the fast backend runs runs on (default: every core,
-    or ``SWARMTAG_THREADS``).
-
-    >>> from swarmtag.policy import Urgency
-    >>> result = simulate(Scenario(ticks=600), Urgency(alpha=0.7), seed=1, runs=2)
-    >>> len(result.carriers), result.carriers.conditions, result.carriers.time_unit
-    (14, ('urgency:alpha=0.7',), 'tick')
-    """
-    checked: object = scenario
-    if not isinstance(checked, Scenario):
-        msg = f"scenario: {checked!r} is not a Scenario"
-        raise ConfigError(msg)
-    runs = check_int("runs", runs, low=1, high=MAX_RUN_INDEX)
-    controller = check_choice("controller", controller, CONTROLLERS)
-    backend = resolve_backend(backend, controller=controller)
-    if threads is not None:
-        threads = check_int("threads", threads, low=1, high=MAX_THREADS)
-    check_memory(
-        f"{runs} runs of {scenario.robots} robots and {scenario.carriers} carriers",
-        batch_memory(scenario, runs, record=record, backend=backend),
-        error=ConfigError,
-    )
-    params = make_params(scenario, policy)
-    if backend == "fast":
-        return _simulate_fast(
-            scenario, params, seed=seed, runs=runs, run_offset=run_offset, record=record,
-            check=check, threads=threads,
-        )  # fmt: skip
-    state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset, backend=backend)
-    source = RandomSource(params, seed=seed, run_ids=state.run_ids)
-    if controller == "builtin":
-        return run_batch(state, params, source, seed=seed, record=record, check=check)
-    try:
-        from swarmtag.robot.sil import TreeController  # noqa: PLC0415 - py_trees is an extra
-    except ModuleNotFoundError as missing:
-        msg = (
-            f"controller: 'bt' needs {missing.name} (install the robot extra: "
-            "pip install 'swarmtag[robot]')"
-        )
-        raise ConfigError(msg) from None
-    trees = TreeController()
-    try:
-        return run_batch(
-            state, params, source, seed=seed, record=record, check=check, controller=trees
-        )
-    finally:
-        trees.close()

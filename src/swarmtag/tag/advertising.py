@@ -1,7 +1,7 @@
 """When a tag advertises: at ``phase + k * interval`` on a grid of whole microseconds.
 
 One schedule for every radio in the project: the simulator's radio channel
-(``sim/sense.py``, vectorised per tick) and the virtual radio of the tag
+(``sim/world/sensing.py``, vectorised per tick) and the virtual radio of the tag
 backends (``tag/backends/sim.py``, advert by advert) both count adverts with
 these functions, so a tag with a given phase and interval is heard at the
 same moments by both (``tests/tag/test_advertising.py`` checks it). Integer

@@ -7,7 +7,8 @@ from dataclasses import fields
 import numpy as np
 
 from swarmtag.policy import Policy
-from swarmtag.sim import Scenario, SimResult, WorldState, run_csv, simulate
+from swarmtag.sim import Scenario, SimResult, WorldState, simulate
+from swarmtag.sim.checks import run_csv
 
 TAG_CACHES = (
     "blocked_until",

@@ -9,10 +9,11 @@ import numba
 import numpy as np
 import pytest
 
+import swarmtag.sim.backends as sim_backends
 import swarmtag.sim.fast._runner as fast_runner
-import swarmtag.sim.runner as sim_runner
 from swarmtag.errors import ConfigError
 from swarmtag.policy import Proximity, Urgency
+from swarmtag.robot.sil import TreeController
 from swarmtag.sim import (
     Realism,
     Reprioritisation,
@@ -20,16 +21,17 @@ from swarmtag.sim import (
     WorldState,
     load_profile,
     make_params,
-    run_csv,
     simulate,
 )
-from swarmtag.sim.docking import STUCK_PROGRESS
+from swarmtag.sim.backends import FAST, REFERENCE, resolve_backend
+from swarmtag.sim.checks import run_csv
+from swarmtag.sim.control import rules
 from swarmtag.sim.fast import _docking, _scene
 from swarmtag.sim.fast._index import index_robots
 from swarmtag.sim.fast._layout import _KERNEL_ONLY, Constants, World, constants_of
 from swarmtag.sim.fast._scratch import EVENT_SLOTS, Scratch
-from swarmtag.sim.runner import resolve_backend, seeded_state
-from swarmtag.sim.scene import _ATTEMPTS, _RESTARTS
+from swarmtag.sim.model import scene
+from swarmtag.sim.runner import seeded_state
 from tests.sim.fast.helpers import TAG_CACHES, assert_same
 
 SCENARIO = replace(Scenario.default(3, 7), ticks=600)
@@ -47,16 +49,17 @@ def test_layout_mirrors_the_world_state():
     assert (constants.policy_kind, constants.policy_parameter) == (1, 0.7)
 
 
-def test_constants_copied_from_the_reference_agree():
-    assert _docking.STUCK_PROGRESS == STUCK_PROGRESS
-    assert (_scene._ATTEMPTS, _scene._RESTARTS) == (_ATTEMPTS, _RESTARTS)
+def test_the_compiled_kernel_imports_the_reference_constants_rather_than_copying_them():
+    assert _docking.STUCK_PROGRESS is rules.STUCK_PROGRESS
+    assert _scene.PLACE_ATTEMPTS is scene.PLACE_ATTEMPTS
+    assert _scene.PLACE_RESTARTS is scene.PLACE_RESTARTS
 
 
 def test_default_backend_is_fast_where_numba_is_installed(monkeypatch):
-    assert resolve_backend(None) == "fast"
-    assert resolve_backend(None, controller="bt") == "reference"
-    monkeypatch.setattr(sim_runner, "fast_available", lambda: False)
-    assert resolve_backend(None) == "reference"
+    assert resolve_backend(None) is FAST
+    assert resolve_backend(None, controller=TreeController()) is REFERENCE
+    monkeypatch.setattr(sim_backends, "fast_available", lambda: False)
+    assert resolve_backend(None) is REFERENCE
     with pytest.raises(ConfigError, match=r"backend: 'fast' needs numba .*swarmtag\[fast\]"):
         simulate(SCENARIO, Proximity(), seed=0, runs=1, backend="fast")
 
@@ -64,7 +67,7 @@ def test_default_backend_is_fast_where_numba_is_installed(monkeypatch):
 def test_bad_backends_are_refused():
     with pytest.raises(ConfigError, match="backend"):
         simulate(SCENARIO, Proximity(), seed=0, runs=1, backend="gpu")
-    with pytest.raises(ConfigError, match="runs the built-in controller only"):
+    with pytest.raises(ConfigError, match="'fast' cannot run the 'bt' controller"):
         simulate(SCENARIO, Proximity(), seed=0, runs=1, backend="fast", controller="bt")
     with pytest.raises(ConfigError, match="threads"):
         simulate(SCENARIO, Proximity(), seed=0, runs=1, backend="fast", threads=0)

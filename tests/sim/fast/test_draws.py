@@ -15,8 +15,8 @@ from swarmtag.sim.fast._geometry import unit_vector
 from swarmtag.sim.fast._layout import Constants, constants_of
 from swarmtag.sim.fast._pcg import states_of
 from swarmtag.sim.fast._scratch import Scratch, scratch_for
-from swarmtag.sim.params import make_params
-from swarmtag.sim.randomness import stream, unit_vectors
+from swarmtag.sim.model.params import make_params
+from swarmtag.sim.model.randomness import stream, unit_vectors
 
 
 @numba.njit(cache=False)  # not cached: machine code cached here would keep old _draws code

@@ -13,7 +13,7 @@ from swarmtag.sim.fast._pcg import (
     states_of,
     uniform,
 )
-from swarmtag.sim.randomness import Stream, stream
+from swarmtag.sim.model.randomness import Stream, stream
 
 WORDS, UNIFORMS, GAUSSIANS = 0, 1, 2
 

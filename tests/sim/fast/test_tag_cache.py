@@ -13,10 +13,10 @@ import pytest
 from swarmtag.policy import Proximity, Urgency
 from swarmtag.sim import Camera, Radio, Realism, Reprioritisation, Scenario, load_profile, simulate
 from swarmtag.sim import fast as fast_backend
-from swarmtag.sim import params as params_module
 from swarmtag.sim.fast import TagCacheFull, _layout, simulate_fast
-from swarmtag.sim.params import make_params
-from swarmtag.sim.runner import _result, seeded_state
+from swarmtag.sim.model import params as params_module
+from swarmtag.sim.model.params import make_params
+from swarmtag.sim.runner import batch_result, seeded_state
 from tests.sim.fast.helpers import assert_same, compare
 from tests.sim.fast.test_equivalence import CASES
 
@@ -101,7 +101,7 @@ def test_every_capacity_overflows_or_gives_the_reference_bytes(scenario, bound):
         except TagCacheFull as full:
             outcomes[capacity] = f"full, next {full.capacity}"
             continue
-        result = _result(
+        result = batch_result(
             final, params, seed=11, events=events, breakdowns=breakdowns, recorder=None
         )
         assert_same(reference, result)

@@ -5,7 +5,7 @@ logs byte for byte as ``swarmtag.sim``'s numpy kernel, which stays the
 readable reference and the test oracle. Runs are advanced in parallel on
 every core. Needs numba (the ``fast`` extra); import this package only
 through ``swarmtag.sim.simulate(..., backend="fast")`` or after checking
-``swarmtag.sim.runner.fast_available()``.
+``swarmtag.sim.backends.fast_available()``.
 """
 
 from __future__ import annotations

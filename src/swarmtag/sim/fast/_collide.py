@@ -1,4 +1,4 @@
-"""Resolve collisions, compiled: ``sim/motion.py``'s Jacobi passes for one run.
+"""Resolve collisions, compiled: ``sim/world/motion.py``'s Jacobi passes for one run.
 
 ``resolve_run`` runs the passes (every push from the positions at the start
 of the pass, sums over touching bodies in index order from 0.0, then the
@@ -24,6 +24,7 @@ from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._motion import start_body
 from swarmtag.sim.fast._scratch import Scratch
+from swarmtag.sim.model.state import Mode
 
 __all__ = [
     "collide_range",
@@ -34,8 +35,6 @@ __all__ = [
     "resolve_run",
     "settle_positions",
 ]
-
-_WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
 
 
 @inlined
@@ -499,5 +498,5 @@ def drop_ghosts(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
         dy = w.robot_pos[r, n, 1] - w.carrier_pos[r, ghost, 1]
         _, _, depth = contact(dx, dy, x.extent[r, n] + k.carrier_half, x.radius[r, n], 1.0)
         mode = w.mode[r, n]
-        if depth <= 0 and mode not in (_DOCK, _CENTRE):
+        if depth <= 0 and mode not in (Mode.DOCK, Mode.CENTRE):
             w.ghost[r, n] = -1

@@ -1,7 +1,7 @@
 """Breakdowns and the built-in controller's ``decide`` step, compiled, robot by robot.
 
 ``break_down_robots`` is ``world.break_down``; ``decide_robots`` is
-``sim/decide.py`` (pursuit checks, taken faces, selection with the policy's
+``sim/builtin/decide.py`` (pursuit checks, taken faces, selection with the policy's
 ``kernel_score``, walk and sidestep directions). A robot's decision reads the
 other robots' positions but changes only its own fields, so any range of
 robots can be decided independently.
@@ -21,12 +21,12 @@ from swarmtag.sim.fast._jit import inlined, jit
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._tag_cache import block, known_blocked_until, known_status, known_urgency
+from swarmtag.sim.model.events import EventKind
+from swarmtag.sim.model.state import Mode
+from swarmtag.tag import TagStatus
 
 __all__ = ["break_down_robots", "decide_robots", "is_loaded", "to_walk"]
 
-_WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
-_AWAITING = 1
-_BREAKDOWN, _ABANDON, _TIMEOUT, _SELECT, _CANDIDATES = 1, 2, 3, 4, 5
 
 _score = jit(kernel_score)
 
@@ -34,13 +34,13 @@ _score = jit(kernel_score)
 @inlined
 def is_loaded(mode: int, target: int) -> bool:
     """``_index.is_loaded`` for one robot."""
-    return (_LIFT <= mode <= _RELEASE or mode == _BROKEN) and target >= 0
+    return (Mode.LIFT <= mode <= Mode.RELEASE or mode == Mode.BROKEN) and target >= 0
 
 
 @inlined
 def to_walk(r: int, n: int, w: World) -> None:
     """``_index.to_walk`` for one robot."""
-    w.mode[r, n] = _WALK
+    w.mode[r, n] = Mode.WALK
     w.target[r, n] = -1
     w.face[r, n] = -1
     w.timer[r, n] = 0
@@ -54,14 +54,14 @@ def break_down_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scrat
         return
     for n in range(lo, hi):
         mode = w.mode[r, n]
-        if not (x.breakdown_draw[r, n] < k.breakdown) or mode == _BROKEN:
+        if not (x.breakdown_draw[r, n] < k.breakdown) or mode == Mode.BROKEN:
             continue
         loaded = is_loaded(mode, w.target[r, n])
-        emit(r, n, _BREAKDOWN, w.target[r, n] if loaded else -1, np.nan, x)
+        emit(r, n, EventKind.BREAKDOWN, w.target[r, n] if loaded else -1, np.nan, x)
         if not loaded:
             w.target[r, n] = -1
         w.face[r, n] = -1
-        w.mode[r, n] = _BROKEN
+        w.mode[r, n] = Mode.BROKEN
 
 
 @inlined
@@ -133,15 +133,15 @@ def _nearest_face(
 def _pursuit_check(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     """Abandon unless AWAITING_PICKUP was heard, else time out (``decide._pursuit_checks``)."""
     mode = w.mode[r, n]
-    if not _PREDOCK <= mode <= _CENTRE:
+    if not Mode.PREDOCK <= mode <= Mode.CENTRE:
         return
     target = w.target[r, n]
     heard = known_status(r, n, max(target, 0), w, k)
-    if heard != _AWAITING:
-        emit(r, n, _ABANDON, target, float(heard), x)
+    if heard != TagStatus.AWAITING_PICKUP:
+        emit(r, n, EventKind.ABANDON, target, float(heard), x)
         to_walk(r, n, w)
     elif t - w.pursuit_start[r, n] >= k.timeout_ticks:
-        emit(r, n, _TIMEOUT, target, np.nan, x)
+        emit(r, n, EventKind.TIMEOUT, target, np.nan, x)
         block(r, n, target, t + k.cooldown_ticks, w, k)
         to_walk(r, n, w)
 
@@ -149,7 +149,7 @@ def _pursuit_check(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -
 @inlined
 def _switch_taken_face(r: int, n: int, w: World, k: Constants, x: Scratch) -> None:
     """A robot in PREDOCK whose point is taken moves on (``decide._switch_taken_faces``)."""
-    if not k.avoid_taken_faces or w.mode[r, n] != _PREDOCK:
+    if not k.avoid_taken_faces or w.mode[r, n] != Mode.PREDOCK:
         return
     target = w.target[r, n]
     cx = w.carrier_pos[r, target, 0]
@@ -175,7 +175,7 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     for i in range(x.seen_count[r, n]):
         c = x.seen_list[r, n, i]
         if not (
-            known_status(r, n, c, w, k) == _AWAITING
+            known_status(r, n, c, w, k) == TagStatus.AWAITING_PICKUP
             and known_blocked_until(r, n, c, w, k) <= t
             and (
                 w.free_face[r, c, 0]
@@ -208,9 +208,9 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
         open_face = _nearest_face(r, n, best, True, w, k, x)
         if open_face >= 0:
             face = open_face
-    emit(r, n, _SELECT, best, float(known_urgency(r, n, best, w, k)), x)
-    emit(r, n, _CANDIDATES, best, float(count), x)
-    w.mode[r, n] = _PREDOCK
+    emit(r, n, EventKind.SELECT, best, float(known_urgency(r, n, best, w, k)), x)
+    emit(r, n, EventKind.CANDIDATES, best, float(count), x)
+    w.mode[r, n] = Mode.PREDOCK
     w.target[r, n] = best
     w.face[r, n] = face
     w.pursuit_start[r, n] = t
@@ -223,7 +223,7 @@ def _directions(
     """Fresh walk directions, the correlated walk's turn, sidesteps (end of ``decide``)."""
     push_x = w.contact[r, n, 0]
     push_y = w.contact[r, n, 1]
-    walking = w.mode[r, n] == _WALK
+    walking = w.mode[r, n] == Mode.WALK
     fresh = walking and (w.redirect[r, n] or push_x != 0 or push_y != 0)
     if fresh:
         wx, wy = unit_vector(x.walk_gaussians[r, n, 0], x.walk_gaussians[r, n, 1])
@@ -247,7 +247,7 @@ def _directions(
                 w.walk_clock[r, n] = 0
         if fresh:
             w.walk_clock[r, n] = 0
-    if w.mode[r, n] == _TRANSPORT and w.stuck[r, n] >= k.stuck_ticks and w.sidestep[r, n] == 0:
+    if w.mode[r, n] == Mode.TRANSPORT and w.stuck[r, n] >= k.stuck_ticks and w.sidestep[r, n] == 0:
         sx, sy = unit_vector(x.sidestep_gaussians[r, n, 0], x.sidestep_gaussians[r, n, 1])
         sx, sy = away_from(sx, sy, push_x, push_y)
         w.sidestep_dir[r, n, 0] = sx
@@ -275,6 +275,6 @@ def decide_robots(
     for n in range(lo, hi):
         _pursuit_check(r, n, t, w, k, x)
         _switch_taken_face(r, n, w, k, x)
-        if x.before_mode[r, n] == _WALK and w.mode[r, n] == _WALK:
+        if x.before_mode[r, n] == Mode.WALK and w.mode[r, n] == Mode.WALK:
             _select(r, n, t, w, k, x)
         _directions(r, n, turns, row, w, k, x)

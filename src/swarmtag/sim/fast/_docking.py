@@ -9,6 +9,7 @@ mark. ``free_faces_run`` is ``predock.free_faces`` for one run.
 
 from __future__ import annotations
 
+from swarmtag.sim.control.rules import STUCK_PROGRESS
 from swarmtag.sim.fast._decide import to_walk
 from swarmtag.sim.fast._events import emit
 from swarmtag.sim.fast._floor import clear_of_shelves, in_dropoff
@@ -18,6 +19,9 @@ from swarmtag.sim.fast._index import index_obstacles
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._scratch import Scratch
+from swarmtag.sim.model.events import EventKind
+from swarmtag.sim.model.state import Mode
+from swarmtag.tag import TagStatus
 
 __all__ = [
     "FAILURE_LOWERED",
@@ -33,10 +37,6 @@ __all__ = [
     "free_faces_run",
 ]
 
-_WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
-_IDLE, _AWAITING, _PICKED_UP = 0, 1, 2
-_LIFT_EVENT, _LIFT_REFUSED, _DELIVER = 6, 7, 8
-STUCK_PROGRESS = 0.25  # docking.STUCK_PROGRESS (tests check they agree)
 
 FAILURE_NOT_PICKED_UP = 1
 """``Scratch.failure``: a robot released a carrier whose tag is not PICKED_UP."""
@@ -68,13 +68,17 @@ def arrive_clocks(r: int, lo: int, hi: int, stamp: int, w: World, k: Constants, 
             w.robot_pos[r, n, 0] - x.before_pos[r, n, 0],
             w.robot_pos[r, n, 1] - x.before_pos[r, n, 1],
         )
-        if mode == _TRANSPORT and w.sidestep[r, n] == 0 and moved < STUCK_PROGRESS * w.speed[r, n]:
+        if (
+            mode == Mode.TRANSPORT
+            and w.sidestep[r, n] == 0
+            and moved < STUCK_PROGRESS * w.speed[r, n]
+        ):
             w.stuck[r, n] += 1
         else:
             w.stuck[r, n] = 0
-        if mode in (_CENTRE, _LIFT, _RELEASE) and w.timer[r, n] > 0:
+        if mode in (Mode.CENTRE, Mode.LIFT, Mode.RELEASE) and w.timer[r, n] > 0:
             w.timer[r, n] -= 1
-        if mode in (_DOCK, _CENTRE, _LIFT):
+        if mode in (Mode.DOCK, Mode.CENTRE, Mode.LIFT):
             x.carrier_mark[r, max(w.target[r, n], 0)] = stamp
 
 
@@ -88,14 +92,14 @@ def arrive_drive_in(r: int, stamp: int, w: World, k: Constants, x: Scratch) -> N
         x.drive_in[r, n] = False
         x.centred[r, n] = False
         mode = w.mode[r, n]
-        if mode not in (_PREDOCK, _DOCK):
+        if mode not in (Mode.PREDOCK, Mode.DOCK):
             continue
         target = max(w.target[r, n], 0)
         cx = w.carrier_pos[r, target, 0]
         cy = w.carrier_pos[r, target, 1]
         rx = w.robot_pos[r, n, 0]
         ry = w.robot_pos[r, n, 1]
-        if mode == _DOCK:
+        if mode == Mode.DOCK:
             x.centred[r, n] = norm(rx - cx, ry - cy) <= k.arrival_tolerance
             continue
         face = max(w.face[r, n], 0)
@@ -123,11 +127,11 @@ def arrive_requests(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch
     for n in range(lo, hi):
         x.lift[r, n] = -1
         if x.drive_in[r, n]:
-            w.mode[r, n] = _DOCK
+            w.mode[r, n] = Mode.DOCK
         elif x.centred[r, n]:
-            w.mode[r, n] = _CENTRE
+            w.mode[r, n] = Mode.CENTRE
             w.timer[r, n] = k.dock_ticks
-        if w.mode[r, n] == _CENTRE and w.timer[r, n] == 0:
+        if w.mode[r, n] == Mode.CENTRE and w.timer[r, n] == 0:
             x.lift[r, n] = w.target[r, n]
 
 
@@ -157,7 +161,7 @@ def answer_lifts(r: int, t: int, stamp: int, w: World, k: Constants, x: Scratch)
         dx = w.robot_pos[r, n, 0] - w.carrier_pos[r, c, 0]
         dy = w.robot_pos[r, n, 1] - w.carrier_pos[r, c, 1]
         claim = (
-            w.status[r, c] == _AWAITING
+            w.status[r, c] == TagStatus.AWAITING_PICKUP
             and w.carried_by[r, c] < 0
             and w.present[r, c]
             and w.ghost[r, n] == c
@@ -169,14 +173,14 @@ def answer_lifts(r: int, t: int, stamp: int, w: World, k: Constants, x: Scratch)
             any_accepted = True
         else:
             x.refused[r, n] = True
-            emit(r, n, _LIFT_REFUSED, c, float(w.status[r, c]), x)
+            emit(r, n, EventKind.LIFT_REFUSED, c, float(w.status[r, c]), x)
     for n in range(k.robots):
         if x.accepted[r, n]:
             c = x.lift[r, n]
-            w.status[r, c] = _PICKED_UP
+            w.status[r, c] = TagStatus.PICKED_UP
             w.carried_by[r, c] = n
             w.pickup_time[r, c] = t
-            emit(r, n, _LIFT_EVENT, c, float(w.urgency[r, c]), x)
+            emit(r, n, EventKind.LIFT, c, float(w.urgency[r, c]), x)
     return any_accepted
 
 
@@ -187,11 +191,11 @@ def carry_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -
         if x.refused[r, n]:
             to_walk(r, n, w)
         if x.accepted[r, n]:
-            w.mode[r, n] = _LIFT
+            w.mode[r, n] = Mode.LIFT
             w.timer[r, n] = k.lift_ticks
-        x.raised[r, n] = w.mode[r, n] == _LIFT and w.timer[r, n] == 0
+        x.raised[r, n] = w.mode[r, n] == Mode.LIFT and w.timer[r, n] == 0
         if x.raised[r, n]:
-            w.mode[r, n] = _TRANSPORT
+            w.mode[r, n] = Mode.TRANSPORT
             w.stuck[r, n] = 0
             w.sidestep[r, n] = 0
             if not k.has_floor:
@@ -199,11 +203,11 @@ def carry_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -
                 y = minimum(maximum(w.robot_pos[r, n, 1], k.carrier_half), high)
                 w.goal[r, n, 0] = k.transport_x
                 w.goal[r, n, 1] = y
-        if w.mode[r, n] == _TRANSPORT and in_dropoff(r, n, w.target[r, n], w, k):
-            w.mode[r, n] = _RELEASE
+        if w.mode[r, n] == Mode.TRANSPORT and in_dropoff(r, n, w.target[r, n], w, k):
+            w.mode[r, n] = Mode.RELEASE
             w.timer[r, n] = k.release_ticks
         x.lower[r, n] = -1
-        if w.mode[r, n] == _RELEASE and w.timer[r, n] == 0:
+        if w.mode[r, n] == Mode.RELEASE and w.timer[r, n] == 0:
             x.lower[r, n] = w.target[r, n]
             to_walk(r, n, w)
 
@@ -269,19 +273,19 @@ def deliver_run(r: int, t: int, lifted: bool, w: World, k: Constants, x: Scratch
         c = x.lower[r, n]
         if c < 0:
             continue
-        if w.status[r, c] != _PICKED_UP:
+        if w.status[r, c] != TagStatus.PICKED_UP:
             x.failure[r] = FAILURE_NOT_PICKED_UP
             continue
         if w.carried_by[r, c] != n or not in_dropoff(r, n, c, w, k):
             x.failure[r] = FAILURE_LOWERED
             continue
-        w.status[r, c] = _IDLE
+        w.status[r, c] = TagStatus.IDLE
         w.present[r, c] = False
         w.carried_by[r, c] = -1
         w.delivery_time[r, c] = t
         w.deliverer[r, c] = n
         w.delivery_urgency[r, c] = w.urgency[r, c]
-        emit(r, n, _DELIVER, c, float(w.urgency[r, c]), x)
+        emit(r, n, EventKind.DELIVER, c, float(w.urgency[r, c]), x)
     if lifted:
         index_obstacles(r, w, k, x)  # one obstacle fewer
         free_faces_run(r, w, k, x)

@@ -19,7 +19,7 @@ from swarmtag.sim.fast._jit import inlined, jit
 from swarmtag.sim.fast._layout import Constants
 from swarmtag.sim.fast._pcg import standard_normal, uniform
 from swarmtag.sim.fast._scratch import Scratch
-from swarmtag.sim.randomness import Stream
+from swarmtag.sim.model.randomness import Stream
 
 __all__ = ["DRAW_CHUNK", "STREAMS", "chunk_end", "draw", "draw_range", "draw_units"]
 

@@ -1,7 +1,7 @@
-"""Scalar geometry of the compiled kernel: ``sim/geometry.py`` one operation at a time.
+"""Scalar geometry of the compiled kernel: ``sim/model/geometry.py`` one operation at a time.
 
 Every function here performs the same IEEE operations, in the same order, as
-its batched numpy twin in ``swarmtag.sim.geometry`` (named in each docstring),
+its batched numpy twin in ``swarmtag.sim.model.geometry`` (named in each docstring),
 so that the compiled kernel's positions are the reference kernel's bit for
 bit. ``maximum``/``minimum`` are numpy's ``np.maximum``/``np.minimum`` for
 numbers that are not NaN (the kernel never makes a NaN position).

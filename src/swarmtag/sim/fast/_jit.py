@@ -37,6 +37,7 @@ and 51 s after):
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import hashlib
 import os
@@ -141,11 +142,41 @@ def counted(function: _F) -> _F:
     return _compiled(function, _OPTIONS, python_calls=True)
 
 
+_DATA_SUFFIXES: Final = (".npz", ".npy")
+"""Package data beside the sources whose numbers the compiled code holds (``ziggurat.npz``)."""
+
+
+def _kernel_sources() -> list[Path]:
+    """This package's sources and data, and the project modules they import directly.
+
+    The compiled functions read constants (robot modes, event kinds, tag
+    statuses, shared rules) from modules outside this folder, and tables
+    from data files in it (``_DATA_SUFFIXES``: numba freezes a global array
+    into the machine code): an edit there must discard the machine code too.
+    """
+    here = Path(__file__).parent
+    package_root = here.parents[1]
+    sources = set(here.glob("*.py"))
+    for path in list(sources):
+        for node in ast.walk(ast.parse(path.read_bytes())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                parts = node.module.split(".")
+                if parts[0] != "swarmtag" or parts[:3] == ["swarmtag", "sim", "fast"]:
+                    continue
+                base = package_root.joinpath(*parts[1:])
+                module = base.with_suffix(".py")
+                sources.add(module if module.is_file() else base / "__init__.py")
+    sources.update(path for path in here.iterdir() if path.suffix in _DATA_SUFFIXES)
+    return sorted(sources)
+
+
 def _sources_digest() -> str:
-    """SHA-256 over this package's Python sources (names and bytes, in name order)."""
+    """SHA-256 over the kernel's sources and data (paths and bytes, in path order)."""
     digest = hashlib.sha256()
-    for path in sorted(Path(__file__).parent.glob("*.py")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    root = Path(__file__).parents[2]
+    for path in _kernel_sources():
+        name = path.relative_to(root).as_posix()
+        digest.update(name.encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()
 
 

@@ -2,8 +2,10 @@
 
 ``World`` holds the arrays of ``WorldState`` under the same names (the
 kernel changes them in place; ``world_of``/``state_of`` convert without
-copying), plus each run's own tick. ``Constants`` is ``Params`` as plain
-numbers (the policy as a kind and a parameter, ``policy_code``). Every
+copying), plus each run's own tick. ``Constants`` (generated,
+``_constants.py``) is every kernel parameter of ``Params`` as a plain number,
+then the backend's own values (``_extras.py``; the policy as a kind and a
+parameter, ``policy_code``; grids; the floor's arrays). Every
 array has the run axis first, so runs never share memory and a parallel
 loop over runs needs no locks; the kernel's working space is ``_scratch``'s.
 """
@@ -16,11 +18,12 @@ from typing import Final, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag.sim.broad_phase import padding
+from swarmtag.sim.config.floor_map import PICKUP
+from swarmtag.sim.fast._constants import PARAMETERS, Constants
 from swarmtag.sim.fast._grid import table_bits
-from swarmtag.sim.floor_map import PICKUP
-from swarmtag.sim.params import FIRST_CACHE_CAPACITY, Params
-from swarmtag.sim.state import WorldState
+from swarmtag.sim.model.params import FIRST_CACHE_CAPACITY, Params
+from swarmtag.sim.model.state import WorldState
+from swarmtag.sim.world.broad_phase import padding
 
 __all__ = [
     "GRID_FROM",
@@ -114,87 +117,6 @@ _KERNEL_ONLY: Final = (
 """``World`` fields that are not ``WorldState``'s."""
 
 
-class Constants(NamedTuple):
-    """``Params`` as the numbers the kernel reads (lengths in metres, times in ticks)."""
-
-    robots: int
-    carriers: int
-    arena: float
-    dropoff_left: float
-    robot_radius: float
-    carrier_half: float
-    turn_cos: float
-    turn_sin: float
-    detection_radius: float
-    split: bool
-    radio_range: float
-    camera_range: float
-    occlusion: int
-    memory_ticks: int
-    tick_us: int
-    advert_us: int
-    walk_turn_ticks: int
-    avoid_taken_faces: bool
-    predock_offset: float
-    arrival_tolerance: float
-    transport_x: float
-    dock_ticks: int
-    lift_ticks: int
-    release_ticks: int
-    timeout_ticks: int
-    cooldown_ticks: int
-    stuck_ticks: int
-    sidestep_ticks: int
-    collision_iterations: int
-    run_ticks: int
-    growing: bool
-    horizon: float
-    advertisement_loss: float
-    status_delay: int
-    detection_noise: float
-    breakdown: float
-    policy_kind: int
-    policy_parameter: float
-    grid_cell: float
-    """Side of a grid cell: the longest reach of a collision (two loaded robots, ...)."""
-    robot_bits: int
-    """The robots' grid tables have ``2**bits`` by ``2**bits`` buckets (``_grid.table_bits``)."""
-    carrier_bits: int
-    """The same for the carriers' grid tables."""
-    obstacle_grid: bool
-    """Find each robot's obstacle carriers with the grid (many carriers) rather than a scan."""
-    robot_grid: bool
-    """Find each robot's neighbours with the grid (many robots) rather than a scan."""
-    sight_cell: float
-    """Side of a coarse grid cell: the camera's range (at least ``grid_cell``)."""
-    radio_grid: bool
-    """Find the advertising tags each robot may hear with a grid (many carriers, split)."""
-    radio_cell: float
-    """Side of a radio grid cell: the radio's range, padded against rounding."""
-    sparse_cache: bool
-    """Robots keep their tag caches as short lists (``Params.sparse_tag_cache``)."""
-    cache_capacity: int
-    """Entries of a sparse tag cache (``World.cache_*``); 0 with dense caches."""
-    arena_height: float
-    has_floor: bool
-    """A warehouse floor (the ``floor_*`` arrays and ``pickup_slots``); else the lab arena."""
-    floor_cell: float
-    floor_rows: int
-    floor_cols: int
-    floor_blocked: B1
-    """(rows + 2, cols + 2) shelves and the wall around (``FloorMap.blocked``)."""
-    floor_area: I8
-    """(rows, cols) drop-off area id of each cell, -1 none."""
-    floor_waypoint: F8
-    """(D, rows, cols, 2) the next waypoint towards each destination."""
-    floor_destinations: I8
-    """(D,) the destination (area) ids."""
-    pickup_slots: F8
-    """(K, 2) the pick-up slots' centres (one dummy slot in the lab arena)."""
-    slot_at: I8
-    """(rows, cols) the pick-up slot of each cell, -1 none."""
-
-
 def policy_code(params: Params) -> tuple[int, float]:
     """The policy as the kernel's ``(kind, parameter)``: see ``swarmtag.policy.kernel_form``."""
     kind, parameter = params.policy.kernel_form
@@ -266,43 +188,9 @@ def constants_of(params: Params, cache_capacity: int = 0) -> Constants:
     cell = max(2 * half, half + radius, 2 * radius)
     sight = max(cell, params.camera_range)
     radio_scale = max(params.arena, params.arena_height)
+    shared = {name: getattr(params, name) for name in PARAMETERS}
     return Constants(
-        robots=params.robots,
-        carriers=params.carriers,
-        arena=params.arena,
-        dropoff_left=params.dropoff_left,
-        robot_radius=params.robot_radius,
-        carrier_half=params.carrier_half,
-        turn_cos=params.turn_cos,
-        turn_sin=params.turn_sin,
-        detection_radius=params.detection_radius,
-        split=params.split,
-        radio_range=params.radio_range,
-        camera_range=params.camera_range,
-        occlusion=params.occlusion,
-        memory_ticks=params.memory_ticks,
-        tick_us=params.tick_us,
-        advert_us=params.advert_us,
-        walk_turn_ticks=params.walk_turn_ticks,
-        avoid_taken_faces=params.avoid_taken_faces,
-        predock_offset=params.predock_offset,
-        arrival_tolerance=params.arrival_tolerance,
-        transport_x=params.transport_x,
-        dock_ticks=params.dock_ticks,
-        lift_ticks=params.lift_ticks,
-        release_ticks=params.release_ticks,
-        timeout_ticks=params.timeout_ticks,
-        cooldown_ticks=params.cooldown_ticks,
-        stuck_ticks=params.stuck_ticks,
-        sidestep_ticks=params.sidestep_ticks,
-        collision_iterations=params.collision_iterations,
-        run_ticks=params.run_ticks,
-        growing=params.growing,
-        horizon=params.horizon,
-        advertisement_loss=params.advertisement_loss,
-        status_delay=params.status_delay,
-        detection_noise=params.detection_noise,
-        breakdown=params.breakdown,
+        **shared,
         policy_kind=kind,
         policy_parameter=parameter,
         grid_cell=cell,
@@ -315,7 +203,6 @@ def constants_of(params: Params, cache_capacity: int = 0) -> Constants:
         radio_cell=padding(params.radio_range, radio_scale),
         sparse_cache=params.sparse_tag_cache,
         cache_capacity=cache_capacity if params.sparse_tag_cache else 0,
-        arena_height=params.arena_height,
         has_floor=floor is not None,
         floor_cell=floor_cell,
         floor_rows=rows,

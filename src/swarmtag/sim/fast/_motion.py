@@ -1,4 +1,4 @@
-"""Move, compiled: ``sim/motion.py``'s proposals for one run (the collisions: ``_collide``).
+"""Move, compiled: ``sim/world/motion.py``'s proposals for one run (the collisions: ``_collide``).
 
 ``move_robots`` proposes each robot's position and turns its heading;
 ``start_body`` sets its body for the collision passes.
@@ -14,10 +14,9 @@ from swarmtag.sim.fast._geometry import FACE_X, FACE_Y, step_towards, turn_towar
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._scratch import Scratch
+from swarmtag.sim.model.state import Mode
 
 __all__ = ["move_robots", "start_body"]
-
-_WALK, _PREDOCK, _DOCK, _CENTRE, _LIFT, _TRANSPORT, _RELEASE, _BROKEN = range(8)
 
 
 @inlined
@@ -32,28 +31,28 @@ def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
         target = max(w.target[r, n], 0)
         nx = FACE_X[face]
         ny = FACE_Y[face]
-        if k.has_floor and mode == _TRANSPORT:  # the next waypoint of the path to its area
+        if k.has_floor and mode == Mode.TRANSPORT:  # the next waypoint of the path to its area
             goal_x, goal_y = waypoint_of(px, py, w.destination[r, target], k)
             w.goal[r, n, 0] = goal_x
             w.goal[r, n, 1] = goal_y
-        if mode == _WALK:
+        if mode == Mode.WALK:
             qx = px + w.walk[r, n, 0] * speed
             qy = py + w.walk[r, n, 1] * speed
-        elif mode == _TRANSPORT and w.sidestep[r, n] > 0:
+        elif mode == Mode.TRANSPORT and w.sidestep[r, n] > 0:
             qx = px + w.sidestep_dir[r, n, 0] * speed
             qy = py + w.sidestep_dir[r, n, 1] * speed
             w.sidestep[r, n] -= 1
-        elif mode == _PREDOCK:
+        elif mode == Mode.PREDOCK:
             cx = w.carrier_pos[r, target, 0]
             cy = w.carrier_pos[r, target, 1]
             qx, qy = step_towards(
                 px, py, cx + nx * k.predock_offset, cy + ny * k.predock_offset, speed
             )
-        elif mode == _DOCK:
+        elif mode == Mode.DOCK:
             qx, qy = step_towards(
                 px, py, w.carrier_pos[r, target, 0], w.carrier_pos[r, target, 1], speed
             )
-        elif mode == _TRANSPORT:
+        elif mode == Mode.TRANSPORT:
             qx, qy = step_towards(px, py, w.goal[r, n, 0], w.goal[r, n, 1], speed)
         else:
             qx = px
@@ -64,17 +63,17 @@ def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
         tx = qx - px
         ty = qy - py
         distance = math.sqrt(tx * tx + ty * ty)
-        if mode == _PREDOCK:
+        if mode == Mode.PREDOCK:
             fx = -nx
             fy = -ny
-        elif mode == _WALK:
+        elif mode == Mode.WALK:
             fx = w.walk[r, n, 0]
             fy = w.walk[r, n, 1]
         else:
             safe = distance if distance > 0 else 1.0
             fx = tx / safe
             fy = ty / safe
-        if mode in (_PREDOCK, _WALK) or (mode == _TRANSPORT and distance > 0):
+        if mode in (Mode.PREDOCK, Mode.WALK) or (mode == Mode.TRANSPORT and distance > 0):
             hx, hy = turn_towards(
                 w.heading[r, n, 0], w.heading[r, n, 1], fx, fy, k.turn_cos, k.turn_sin
             )
@@ -93,6 +92,6 @@ def start_body(r: int, n: int, w: World, k: Constants, x: Scratch) -> None:
     loaded = is_loaded(mode, w.target[r, n])
     x.extent[r, n] = k.carrier_half if loaded else 0.0
     x.radius[r, n] = 0.0 if loaded else k.robot_radius
-    x.movable[r, n] = not (mode in (_CENTRE, _LIFT) or mode >= _RELEASE)
+    x.movable[r, n] = not (mode in (Mode.CENTRE, Mode.LIFT) or mode >= Mode.RELEASE)
     x.x[r, n] = x.proposed[r, n, 0]
     x.y[r, n] = x.proposed[r, n, 1]

@@ -17,10 +17,10 @@ from swarmtag.sim.fast._index import index_obstacles
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._scratch import Scratch
+from swarmtag.sim.model.events import EventKind
 
 __all__ = ["place_orders_run"]
 
-_ARRIVE = 10
 """``EventKind.ARRIVE``."""
 
 
@@ -101,7 +101,7 @@ def place_orders_run(r: int, t: int, w: World, k: Constants, x: Scratch) -> None
             w.adv_urgency[r, slot, c] = w.urgency[r, c]
         row = x.event_count[r]
         x.event_tick[r, row] = t
-        x.event_kind[r, row] = _ARRIVE
+        x.event_kind[r, row] = EventKind.ARRIVE
         x.event_robot[r, row] = -1
         x.event_carrier[r, row] = c
         x.event_value[r, row] = float(w.urgency[r, c])

@@ -12,8 +12,8 @@ checks millions of numbers against numpy's own).
 
 The algorithms are numpy's: PCG64 (XSL-RR output of the 128-bit LCG, one
 step per 64-bit number), ``random()`` as the top 53 bits times 2**-53, and
-``standard_normal`` as numpy's 256-layer ziggurat with the tables numba
-ships for its own copy of it. A generator's state is four ``uint64``
+``standard_normal`` as numpy's 256-layer ziggurat (``_ziggurat_tables``). A
+generator's state is four ``uint64``
 words (``STATE_WORDS``): the LCG state's high and low halves, then the
 increment's; ``states_of`` reads them off numpy generators.
 """
@@ -25,19 +25,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from importlib import resources
 from typing import Any, Final
 
 import numpy as np
 from llvmlite import ir  # type: ignore[import-untyped]
 from numba import types
 from numba.extending import intrinsic
-from numba.np.random._constants import (
-    fi_double,
-    ki_double,
-    wi_double,
-    ziggurat_nor_inv_r,
-    ziggurat_nor_r,
-)
 
 from swarmtag.sim.fast._jit import inlined, jit
 
@@ -49,12 +43,37 @@ _MULTIPLIER: Final = (2549297995355413924 << 64) + 4865540595714422341
 """PCG's default 128-bit LCG multiplier (numpy's ``PCG_DEFAULT_MULTIPLIER_128``)."""
 _LOW: Final = (1 << 64) - 1
 _pair_type: Any = types.UniTuple
-_KI: Final = ki_double.astype(np.int64)
+_ZIGGURAT_FILE: Final = "ziggurat.npz"
+"""The ziggurat's tables, package data beside this module (see ``_ziggurat_tables``)."""
+
+
+def _ziggurat_tables() -> dict[str, np.ndarray]:
+    """The tables of numpy's ziggurat for the standard normal, read from ``ziggurat.npz``.
+
+    The numbers are numpy's (``ki_double``, ``wi_double``, ``fi_double``,
+    ``ziggurat_nor_r`` and ``ziggurat_nor_inv_r`` of its
+    ``random/src/distributions/ziggurat_constants.h``, as numba copies them
+    for its own ``standard_normal``): the 256-layer ziggurat of Marsaglia and
+    Tsang ("The Ziggurat Method for Generating Random Variables", Journal of
+    Statistical Software 5(8), 2000) for 52-bit magnitudes. ``ki`` (256
+    ``uint64``): a layer's acceptance bound on the magnitude; ``wi`` (256
+    ``float64``): its width, the magnitude's scale; ``fi`` (256 ``float64``):
+    the density at its edge; ``r`` (0-d): where the tail starts, ``inv_r`` its
+    inverse. Copied once from numba's copy; ``tests/sim/fast/test_pcg.py``
+    checks draws made with them against numpy's own, bit for bit.
+    """
+    data = resources.files("swarmtag.sim.fast") / _ZIGGURAT_FILE
+    with data.open("rb") as file, np.load(file, allow_pickle=False) as tables:
+        return {name: tables[name] for name in tables.files}
+
+
+_TABLES: Final = _ziggurat_tables()
+_KI: Final = _TABLES["ki"].astype(np.int64)
 """The ziggurat's acceptance bounds (below 2**52: signed, a cheaper conversion)."""
-_WI: Final = np.asarray(wi_double, dtype=np.float64)
-_FI: Final = np.asarray(fi_double, dtype=np.float64)
-_R: Final = float(ziggurat_nor_r)
-_INV_R: Final = float(ziggurat_nor_inv_r)
+_WI: Final = np.asarray(_TABLES["wi"], dtype=np.float64)
+_FI: Final = np.asarray(_TABLES["fi"], dtype=np.float64)
+_R: Final = float(_TABLES["r"])
+_INV_R: Final = float(_TABLES["inv_r"])
 _TO_UNIT: Final = 1.0 / 9007199254740992.0
 """2**-53: ``random()`` from the top 53 bits."""
 

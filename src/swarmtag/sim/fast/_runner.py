@@ -23,7 +23,6 @@ import numpy as np
 from swarmtag._interrupt import checkpoint
 from swarmtag.errors import SimulationError
 from swarmtag.io import MISSING_ID
-from swarmtag.sim.events import EventKind, EventRecorder, RobotEvents, TickEvents
 from swarmtag.sim.fast._docking import FAILURE_LOWERED, FAILURE_NOT_PICKED_UP
 from swarmtag.sim.fast._draws import STREAMS
 from swarmtag.sim.fast._layout import (
@@ -47,12 +46,13 @@ from swarmtag.sim.fast._split import (
 from swarmtag.sim.fast._sync import SYNC_ABORT
 from swarmtag.sim.fast._tag_cache import FAILURE_CACHE_FULL
 from swarmtag.sim.fast._tick import advance
-from swarmtag.sim.invariants import check_tick
-from swarmtag.sim.params import Params
-from swarmtag.sim.randomness import Stream, check_seed, due_writes, stream, walk_turns
-from swarmtag.sim.state import WorldState
-from swarmtag.sim.trajectories import TrajectoryRecorder
-from swarmtag.sim.wms import operator_writes
+from swarmtag.sim.model.events import EventKind, EventRecorder, RobotEvents, TickEvents
+from swarmtag.sim.model.invariants import check_tick
+from swarmtag.sim.model.params import Params
+from swarmtag.sim.model.randomness import Stream, check_seed, due_writes, stream, walk_turns
+from swarmtag.sim.model.state import WorldState
+from swarmtag.sim.outputs.trajectories import TrajectoryRecorder
+from swarmtag.sim.world.wms import operator_writes
 
 __all__ = ["TagCacheFull", "default_threads", "kernel_compiled", "simulate_fast"]
 

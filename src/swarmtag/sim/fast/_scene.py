@@ -1,4 +1,4 @@
-"""Initial scenes, compiled: ``sim/scene.py``'s draws from each run's scene stream, in its order.
+"""Initial scenes, compiled: ``model/scene.py``'s draws from each run's scene stream, in its order.
 
 The same rejection sampling, the same numbers from the same generator, the
 same IEEE operations, so the scenes are the reference's bit for bit; only
@@ -17,17 +17,15 @@ import numpy as np
 
 from swarmtag.sim.fast._jit import counted, jit
 from swarmtag.sim.fast._pcg import standard_normal, states_of, uniform
-from swarmtag.sim.params import Params
-from swarmtag.sim.randomness import Stream, stream, unit_vectors
-from swarmtag.sim.scene import crowded
-from swarmtag.sim.state import Scene
-from swarmtag.sim.urgency import initial_urgency
+from swarmtag.sim.model.params import Params
+from swarmtag.sim.model.randomness import Stream, stream, unit_vectors
+from swarmtag.sim.model.scene import PLACE_ATTEMPTS, PLACE_RESTARTS, crowded
+from swarmtag.sim.model.state import Scene
+from swarmtag.sim.world.urgency import initial_urgency
 from swarmtag.tag import TagStatus
 
 __all__ = ["TOO_CROWDED_CARRIERS", "TOO_CROWDED_ROBOTS", "sample_scenes", "seeded_scenes"]
 
-_ATTEMPTS = 1000  # scene._ATTEMPTS (tests check they agree)
-_RESTARTS = 100  # scene._RESTARTS
 TOO_CROWDED_CARRIERS = 1
 """``sample_scenes`` failure: the carriers could not be placed."""
 TOO_CROWDED_ROBOTS = 2
@@ -90,12 +88,12 @@ def _place(
     span_x = high_x - low_x
     span_y = high_y - low_y
     count = out.shape[0]
-    for _ in range(_RESTARTS):
+    for _ in range(PLACE_RESTARTS):
         heads[:] = -1
         complete = True
         for k in range(count):
             accepted = False
-            for _ in range(_ATTEMPTS):
+            for _ in range(PLACE_ATTEMPTS):
                 unit_x, high, low = uniform(high, low, inc_high, inc_low)
                 unit_y, high, low = uniform(high, low, inc_high, inc_low)
                 px = low_x + unit_x * span_x

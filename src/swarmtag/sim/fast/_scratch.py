@@ -14,11 +14,12 @@ import numpy as np
 
 from swarmtag.sim.fast._grid import table_bits
 from swarmtag.sim.fast._layout import B1, F8, I4, I8, S1, Constants
+from swarmtag.sim.model.events import EventKind
 
 __all__ = ["EVENT_SLOTS", "Scratch", "scratch_for"]
 
-EVENT_SLOTS: Final = 8
-"""Robot event kinds (``EventKind`` 1-8); a robot has at most one of each per tick."""
+EVENT_SLOTS: Final = int(EventKind.DELIVER)
+"""Robot event kinds (``EventKind`` 1 to ``DELIVER``); a robot has at most one of each per tick."""
 
 
 class Scratch(NamedTuple):

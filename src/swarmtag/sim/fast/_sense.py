@@ -1,4 +1,4 @@
-"""Phase 1 of a compiled tick, sense: ``sim/sense.py`` for one run, robot by robot.
+"""Phase 1 of a compiled tick, sense: ``sim/world/sensing.py`` for one run, robot by robot.
 
 Writes the robots' tag caches and sightings in place and leaves, per robot,
 the carriers whose position it knows and the distance the policy uses to
@@ -19,11 +19,10 @@ from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._tag_cache import hear, known_status
+from swarmtag.sim.model.state import Mode
+from swarmtag.tag import TagStatus
 
 __all__ = ["sense_robots", "tags_advertising"]
-
-_WALK = 0
-_AWAITING = 1
 
 
 @inlined
@@ -277,7 +276,7 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
     for n in range(lo, hi):
         _hear(r, n, t, slot, w, k, x)
         x.seen_count[r, n] = 0
-        if w.mode[r, n] != _WALK:
+        if w.mode[r, n] != Mode.WALK:
             continue
         rx = w.robot_pos[r, n, 0]
         ry = w.robot_pos[r, n, 1]
@@ -299,7 +298,7 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
             )
         for j in range(count):
             c = x.obstacles[r, x.near_carriers[r, j] if k.obstacle_grid else j]
-            if known_status(r, n, c, w, k) != _AWAITING:
+            if known_status(r, n, c, w, k) != TagStatus.AWAITING_PICKUP:
                 continue
             ox = w.carrier_pos[r, c, 0] - rx
             oy = w.carrier_pos[r, c, 1] - ry

@@ -2,7 +2,7 @@
 
 Dense (``Constants.sparse_cache`` false): the ``WorldState`` arrays, one entry
 per robot and carrier (``known_status``, ``known_urgency``, ``heard_tick``,
-``blocked_until``), read and written as ``sim/sense.py`` and ``sim/decide.py``
+``blocked_until``), read and written as ``sim/world/sensing.py`` and ``sim/builtin/decide.py``
 do.
 
 Sparse (``sim.params.sparse_tag_cache``: split perception without sighting
@@ -42,6 +42,7 @@ from typing import Final
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._scratch import Scratch
+from swarmtag.tag import TagStatus
 
 __all__ = [
     "FAILURE_CACHE_FULL",
@@ -54,7 +55,6 @@ __all__ = [
 
 FAILURE_CACHE_FULL: Final = 3
 """``Scratch.failure`` of a run in which a robot's sparse tag cache overflowed."""
-_AWAITING = 1
 
 
 @inlined
@@ -149,13 +149,13 @@ def hear(
         return
     i = _find(r, n, c, w)
     if i >= 0:
-        if status == _AWAITING or c == w.target[r, n]:
+        if status == TagStatus.AWAITING_PICKUP or c == w.target[r, n]:
             w.cache_status[r, n, i] = status
             w.cache_urgency[r, n, i] = urgency
         else:
             _drop(r, n, i, w)
         return
-    if status != _AWAITING:
+    if status != TagStatus.AWAITING_PICKUP:
         return
     count = w.cache_count[r, n]
     if count == k.cache_capacity:

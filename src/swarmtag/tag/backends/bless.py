@@ -39,11 +39,13 @@ import asyncio
 import contextlib
 import errno
 import logging
+import os
 import sys
 import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Final
+from urllib.parse import unquote
 from uuid import UUID
 
 from swarmtag._checks import check_int
@@ -72,8 +74,6 @@ try:
     from bless.backends.bluezdbus.dbus.advertisement import BlueZLEAdvertisement, Type
     from bless.backends.bluezdbus.server import BlessServerBlueZDBus
     from bless.backends.characteristic import GATTCharacteristicProperties
-    from dbus_next._private.address import get_bus_address, parse_address
-    from dbus_next.constants import BusType
     from dbus_next.errors import DBusError
     from dbus_next.signature import Variant
 
@@ -98,6 +98,8 @@ _TICK: Final = 0.05
 """Seconds between two looks at the stop flag inside the server thread."""
 _CLOSE_TIMEOUT: Final = 2.0
 """Seconds to wait for the D-Bus connection to close after leaving the bus."""
+_SYSTEM_BUS: Final = "unix:path=/var/run/dbus/system_bus_socket"
+"""The system bus's address where ``DBUS_SYSTEM_BUS_ADDRESS`` is not set (D-Bus specification)."""
 ADVERTISING_MANAGER: Final = "org.bluez.LEAdvertisingManager1"
 """BlueZ's interface for registering advertisements (on the adapter object)."""
 _FAILED: Final = "org.bluez.Error.Failed"
@@ -193,14 +195,27 @@ def _check_system_bus() -> None:
 
     dbus-next leaves the socket of a failed connection open; asking the
     file system first keeps the common case (no D-Bus, no BlueZ) clean.
+    The address is read as the D-Bus specification writes it (and dbus-next
+    reads it): ``transport:key=value,...`` entries separated by ``;``, the
+    values %-escaped. Only an address of ``unix`` sockets alone is judged here;
+    any other (or one that does not parse) is left to ``connect()``.
     """
-    try:
-        entries = parse_address(get_bus_address(BusType.SYSTEM))  # type: ignore[no-untyped-call]
-    except Exception:  # noqa: BLE001 - an address dbus-next cannot parse fails in connect()
+    address = os.environ.get("DBUS_SYSTEM_BUS_ADDRESS", _SYSTEM_BUS)
+    entries = [entry.partition(":") for entry in address.split(";") if entry]
+    if not entries or any(transport != "unix" or not colon for transport, colon, _ in entries):
         return
-    paths = [options.get("path") for transport, options in entries if transport == "unix"]
-    if entries and len(paths) == len(entries) and not any(p and Path(p).exists() for p in paths):
+    paths = [_address_option(options, "path") for _, _, options in entries]
+    if not any(path and Path(path).exists() for path in paths):
         raise FileNotFoundError(errno.ENOENT, "no D-Bus system bus socket", paths[0])
+
+
+def _address_option(options: str, key: str) -> str | None:
+    """The unescaped value of ``key`` among a D-Bus address entry's ``key=value,...``."""
+    for option in options.split(","):
+        name, equals, value = option.partition("=")
+        if name == key and equals:
+            return unquote(value)
+    return None
 
 
 async def _leave(bus: Any) -> None:  # noqa: ANN401 - dbus-next's MessageBus

@@ -1,0 +1,200 @@
+"""The built-in controller's ``decide`` step: pursuit checks, selection, walk directions.
+
+In this order, for every robot at once (broken robots are the world's,
+``swarmtag.sim.world.handling.break_down``):
+
+1. a pursuing robot (PREDOCK, DOCK, CENTRE) abandons when the status it last
+   heard from its target is not AWAITING_PICKUP, else times out when the
+   pursuit has lasted ``timeout_ticks`` (that carrier is then barred to it
+   for ``cooldown_ticks``); either way it returns to random walk;
+2. with ``avoid_taken_faces``, a robot in PREDOCK whose predock point it
+   sees taken by another robot (nearer to the point, within a robot
+   diameter of it) moves on to the nearest free face not taken, if any;
+3. a robot that was walking at the start of the tick selects, with the
+   policy's ``select``, among its candidates: carriers whose position it
+   knows from the camera, last heard as AWAITING_PICKUP, not cooling down
+   for it and with a free predock face; it will dock at the free face whose
+   predock point is nearest to it (with ``avoid_taken_faces``: the nearest
+   not taken, if there is one). Each selection also records how many
+   candidates there were (the ``candidates`` event);
+4. a walking robot that touched something last tick, or has just returned
+   to walking, takes this tick's random direction, reversed if it points
+   into what it touched (negative dot product with the contact push); with
+   a turning walk, any other walking robot whose heading has been kept for
+   ``walk_turn_ticks`` rotates it by this tick's turn;
+5. a loaded robot stuck for ``stuck_ticks`` starts a sidestep of
+   ``sidestep_ticks`` along this tick's sidestep direction (reversed alike).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag.policy import select
+from swarmtag.sim.control.rules import away_from
+from swarmtag.sim.model.events import EventKind, TickEvents
+from swarmtag.sim.model.geometry import Float
+from swarmtag.sim.model.indexing import PURSUIT_MODES, at_robots, grid, in_modes, own, to_walk
+from swarmtag.sim.model.params import Params
+from swarmtag.sim.model.randomness import TickInputs
+from swarmtag.sim.model.state import Int, Mode, WorldState
+from swarmtag.sim.world.predock import nearest_free_face, taken_faces
+from swarmtag.sim.world.sensing import Senses
+from swarmtag.tag import TagStatus
+
+__all__ = ["decide"]
+
+_AWAITING = int(TagStatus.AWAITING_PICKUP)
+
+
+def _pursuit_checks(s: WorldState, params: Params, t: int, events: TickEvents) -> None:
+    pursuing = in_modes(s.mode, PURSUIT_MODES)
+    if not pursuing.any():
+        return
+    heard = own(s.known_status, s.target)
+    abandon = pursuing & (heard != _AWAITING)
+    timeout = pursuing & ~abandon & (t - s.pursuit_start >= params.timeout_ticks)
+    events.add(EventKind.ABANDON, abandon, s.target, heard.astype(np.float64))
+    events.add(EventKind.TIMEOUT, timeout, s.target, np.full(timeout.shape, np.nan))
+    runs, robots = np.nonzero(timeout)
+    s.blocked_until[runs, robots, s.target[runs, robots]] = t + params.cooldown_ticks
+    to_walk(s, abandon | timeout)
+
+
+def _taken(
+    s: WorldState, centre: Float, params: Params, asking: NDArray[np.bool_]
+) -> NDArray[np.bool_]:
+    """(R, N, 4): the predock points of each robot's carrier it sees another robot stand on.
+
+    Only for the robots ``asking`` (those whose answer is used); False for the others.
+    """
+    return taken_faces(
+        s.robot_pos,
+        centre,
+        params.predock_offset,
+        body=2 * params.robot_radius,
+        sight=params.detection_radius,
+        asking=asking,
+    )
+
+
+def _face(
+    s: WorldState, carrier: Int, free: NDArray[np.bool_], params: Params, chosen: NDArray[np.bool_]
+) -> Int:
+    """The face each robot docks at on ``carrier`` (R, N): nearest free, avoiding taken ones.
+
+    Only the faces of the robots in ``chosen`` (they chose a carrier) are meaningful.
+    """
+    centre = at_robots(s.carrier_pos, carrier)
+    face = nearest_free_face(s.robot_pos, centre, free, params.predock_offset)
+    if not params.avoid_taken_faces:
+        return face
+    taken = _taken(s, centre, params, chosen)
+    open_face = nearest_free_face(s.robot_pos, centre, free & ~taken, params.predock_offset)
+    return np.where(open_face >= 0, open_face, face)
+
+
+def _switch_taken_faces(s: WorldState, params: Params) -> None:
+    """Robots in PREDOCK whose point is taken move on to another free face not taken."""
+    approaching = s.mode == Mode.PREDOCK
+    if not (params.avoid_taken_faces and approaching.any()):
+        return
+    centre = at_robots(s.carrier_pos, s.target)
+    taken = _taken(s, centre, params, approaching)
+    rows, robots = grid(*s.mode.shape)
+    mine = taken[rows, robots, np.maximum(s.face, 0)]
+    switch = approaching & mine
+    if not switch.any():
+        return
+    free = at_robots(s.free_face, s.target) & ~taken
+    other = nearest_free_face(s.robot_pos, centre, free, params.predock_offset)
+    move = switch & (other >= 0)
+    s.face[move] = other[move]
+
+
+def _selection(
+    s: WorldState,
+    *,
+    senses: Senses,
+    walkers: NDArray[np.bool_],
+    params: Params,
+    t: int,
+    events: TickEvents,
+) -> None:
+    if not walkers.any():
+        return
+    available = (
+        walkers[..., None]
+        & senses.known
+        & (s.known_status == _AWAITING)
+        & (s.blocked_until <= t)
+        & np.any(s.free_face, axis=-1)[:, None, :]
+    )
+    if not available.any():
+        return
+    choice = select(
+        params.policy,
+        urgency=s.known_urgency,
+        distance=senses.distance,
+        marker=params.markers,
+        available=available,
+    ).astype(np.int64)
+    chosen = choice >= 0
+    rows, robots = grid(*choice.shape)
+    face = _face(s, choice, at_robots(s.free_face, choice), params, chosen)
+    heard = s.known_urgency[rows, robots, np.maximum(choice, 0)].astype(np.float64)
+    events.add(EventKind.SELECT, chosen, choice, heard)
+    events.add(EventKind.CANDIDATES, chosen, choice, available.sum(axis=-1).astype(np.float64))
+    s.mode[chosen] = Mode.PREDOCK
+    s.target[chosen] = choice[chosen]
+    s.face[chosen] = face[chosen]
+    s.pursuit_start[chosen] = t
+
+
+def _turn_walk(s: WorldState, walking: NDArray[np.bool_], turn: Float, every: int) -> None:
+    """Rotate the walk direction of robots that kept it for ``every`` ticks by ``turn``."""
+    s.walk_clock[walking] += 1
+    due = walking & (s.walk_clock >= every)
+    if not due.any():
+        return
+    x, y = s.walk[..., 0], s.walk[..., 1]
+    c, n = turn[..., 0], turn[..., 1]
+    rx = x * c - y * n
+    ry = x * n + y * c
+    norm = np.sqrt(rx * rx + ry * ry)
+    np.copyto(s.walk, np.stack((rx / norm, ry / norm), axis=-1), where=due[..., None])
+    s.walk_clock[due] = 0
+
+
+def decide(
+    before: WorldState,
+    s: WorldState,
+    *,
+    senses: Senses,
+    inputs: TickInputs,
+    params: Params,
+    t: int,
+    events: TickEvents,
+) -> None:
+    """Apply the decisions of tick ``t`` to ``s`` in place (``before``: the state at tick start)."""
+    _pursuit_checks(s, params, t, events)
+    _switch_taken_faces(s, params)
+    walkers = (before.mode == Mode.WALK) & (s.mode == Mode.WALK)
+    _selection(s, senses=senses, walkers=walkers, params=params, t=t, events=events)
+
+    bumped = (s.contact != 0).any(axis=-1)
+    walking = s.mode == Mode.WALK
+    fresh = walking & (s.redirect | bumped)
+    if fresh.any():
+        np.copyto(s.walk, away_from(inputs.walk, s.contact), where=fresh[..., None])
+        s.redirect[fresh] = False
+    if params.walk_turn_ticks > 0 and inputs.turn is not None:
+        _turn_walk(s, walking & ~fresh, inputs.turn, params.walk_turn_ticks)
+        s.walk_clock[fresh] = 0
+
+    unstick = (s.mode == Mode.TRANSPORT) & (s.stuck >= params.stuck_ticks) & (s.sidestep == 0)
+    if unstick.any():
+        np.copyto(s.sidestep_dir, away_from(inputs.sidestep, s.contact), where=unstick[..., None])
+        s.sidestep[unstick] = params.sidestep_ticks
+        s.stuck[unstick] = 0

@@ -1,0 +1,105 @@
+"""The perception parts of a scenario (SPEC §4.2, §4.2a): the robot's radio and its camera.
+
+Two models of perception, chosen by ``Scenario.perception``:
+
+- ``"split"`` (as on the robot): the BLE radio hears a tag's advertisement
+  (urgency and status) within ``radio.range``, once per advertising
+  ``radio.interval``; the 360° camera sees a carrier (its relative position,
+  hence the distance ``d``) within ``camera.range``, optionally not through
+  other carriers or robots (``camera.occlusion``), and optionally remembers
+  where it saw carriers for ``camera.memory`` seconds. A carrier is a
+  candidate only when its position is known from the camera (now or
+  remembered) **and** it was last heard AWAITING_PICKUP.
+- ``"disc"`` (the model before profiles, kept so old results reproduce):
+  one ``detection_radius``; a carrier within it is both seen and heard,
+  every tick.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Final
+
+from swarmtag.sim.config.parts import MAX_DURATION, MAX_LENGTH
+from swarmtag.sim.config.schema import CHOICE_INDEX, MICROSECONDS, TICKS, Kernel, check_part, param
+
+__all__ = ["OCCLUSION_MODELS", "PERCEPTION_MODELS", "Camera", "Radio"]
+
+PERCEPTION_MODELS: Final = ("disc", "split")
+"""``Scenario.perception``: one detection radius, or radio and camera apart."""
+OCCLUSION_MODELS: Final = ("none", "carriers", "carriers+robots")
+"""``camera.occlusion``: what blocks the camera's line of sight to a carrier."""
+
+
+@dataclass(frozen=True, slots=True)
+class Radio:
+    """The robot's BLE receiver (split perception).
+
+    ``range`` (m) is how far a tag's advertisement is heard (BLE reaches
+    well beyond a lab arena); ``interval`` (s) is the tags' advertising
+    interval: each tag advertises once per interval, at a phase of its own,
+    so a robot's knowledge of a status can lag by up to one interval.
+    Advertisement loss and status delay are in ``realism``.
+    """
+
+    range: float = param(
+        10.0,
+        unit="m",
+        doc="How far a tag's advertisement is heard.",
+        low=0.0,
+        low_open=True,
+        high=MAX_LENGTH,
+        kernel=Kernel("radio_range"),
+    )
+    interval: float = param(
+        0.25,
+        unit="s",
+        doc="The tags' advertising interval.",
+        low=0.0,
+        low_open=True,
+        high=MAX_DURATION,
+        kernel=Kernel("advert_us", MICROSECONDS),
+    )
+
+    def __post_init__(self) -> None:
+        check_part(self, "radio")
+
+
+@dataclass(frozen=True, slots=True)
+class Camera:
+    """The robot's four perimeter cameras, 360° together (split perception).
+
+    ``range`` (m, robot centre to carrier centre) is where a carrier's ArUco
+    marker is read; ``occlusion`` says what blocks the line of sight between
+    the centres (``"none"``, other ``"carriers"``' footprints, or
+    ``"carriers+robots"``); ``memory`` (s) is how long a robot remembers
+    where it last saw a carrier (0: only what it sees now).
+    """
+
+    range: float = param(
+        1.0,
+        unit="m",
+        doc="Robot centre to carrier centre within which a marker is read.",
+        low=0.0,
+        low_open=True,
+        high=MAX_LENGTH,
+        kernel=Kernel("camera_range"),
+    )
+    occlusion: str = param(
+        "none",
+        unit="",
+        doc="What blocks the camera's line of sight.",
+        choices=OCCLUSION_MODELS,
+        kernel=Kernel("occlusion", CHOICE_INDEX),
+    )
+    memory: float = param(
+        0.0,
+        unit="s",
+        doc="How long a robot remembers where it saw a carrier (0: not at all).",
+        low=0.0,
+        high=MAX_DURATION,
+        kernel=Kernel("memory_ticks", TICKS),
+    )
+
+    def __post_init__(self) -> None:
+        check_part(self, "camera")

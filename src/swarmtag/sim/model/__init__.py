@@ -1,0 +1,1 @@
+"""The simulation's data and its step: parameters, state, scenes, random streams, events."""

@@ -1,0 +1,136 @@
+"""Sampling a run's initial scene from its scene stream (SPEC §4.1, §4.5).
+
+The scene stream of run ``i`` (``SeedSequence(S, spawn_key=(i, 0))``) is
+used in this order, whatever the policy, so run ``i`` starts from the same
+scene in every condition:
+
+1. carriers, in marker order, by rejection: each candidate is
+   ``lo + rng.random(2) * (hi - lo)`` within the pick-up area (the carrier
+   wholly inside it); it is kept when its Chebyshev distance to every carrier
+   already placed is at least ``carrier_size + carrier_spacing``. After
+   1000 rejected candidates for one carrier the placement starts over;
+   after 100 restarts the scenario is refused as too crowded;
+2. one ``rng.random(C)`` for the urgencies (``swarmtag.sim.world.urgency``);
+3. robots, in id order, by rejection within the drop-off area: kept when
+   ``sqrt(dx*dx + dy*dy)`` to every robot already placed is at least one
+   diameter (same limits);
+4. ``rng.standard_normal((N, 2))``, normalised: initial headings (and
+   random-walk directions);
+5. ``rng.standard_normal(N)``: speed factors ``clip(1 + v * z, 0.5, 1.5)``
+   for speed variation v (exactly 1 when v = 0);
+6. ``rng.random(C)``: each tag's advertising phase, as a fraction of the
+   advertising interval (drawn last, so the draws above are those of the
+   simulator before it had phases).
+
+A warehouse scene (orders, robots on the floor) is sampled by
+``swarmtag.sim.world.orders.sample_warehouse_scene`` from the same stream.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Final
+
+import numpy as np
+
+from swarmtag.errors import ConfigError
+from swarmtag.sim.model.geometry import Float, length
+from swarmtag.sim.model.params import Params
+from swarmtag.sim.model.randomness import Stream, stream, unit_vectors
+from swarmtag.sim.model.state import Scene
+from swarmtag.sim.world.orders import sample_warehouse_scene
+from swarmtag.sim.world.urgency import initial_urgency
+from swarmtag.tag import TagStatus
+
+__all__ = ["crowded", "sample_scene"]
+
+PLACE_ATTEMPTS: Final = 1000
+PLACE_RESTARTS: Final = 100
+
+
+def _place(
+    rng: np.random.Generator,
+    count: int,
+    *,
+    low: Float,
+    high: Float,
+    far_enough: Callable[[Float, Float], bool],
+    what: str,
+) -> Float:
+    """``count`` points placed one after another by rejection (see the module docs)."""
+    span = high - low
+    for _ in range(PLACE_RESTARTS):
+        placed = np.empty((count, 2))
+        for k in range(count):
+            for _ in range(PLACE_ATTEMPTS):
+                candidate = low + rng.random(2) * span
+                if far_enough(candidate, placed[:k]):
+                    placed[k] = candidate
+                    break
+            else:
+                break
+        else:
+            return placed
+    raise crowded(what)
+
+
+def crowded(what: str) -> ConfigError:
+    """The error for bodies (``what``) that rejection sampling could not place."""
+    msg = (
+        f"{what}: could not place them without overlap after {PLACE_RESTARTS} tries; "
+        "the area is too crowded (widen it or place fewer)"
+    )
+    return ConfigError(msg)
+
+
+def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
+    """The initial scene of global run ``run`` of master seed ``seed``."""
+    rng = stream(seed, run, Stream.SCENE)
+    if params.floor is not None:
+        return sample_warehouse_scene(params, rng)
+    half, radius, arena = params.carrier_half, params.robot_radius, params.arena
+    pitch = 2 * half + params.carrier_spacing
+
+    def carriers_apart(p: Float, others: Float) -> bool:
+        return bool(np.all(np.max(np.abs(others - p), axis=-1) >= pitch))
+
+    carrier_pos = _place(
+        rng,
+        params.carriers,
+        low=np.array([half, half]),
+        high=np.array([params.pickup_right - half, arena - half]),
+        far_enough=carriers_apart,
+        what="carriers",
+    )
+    urgency = initial_urgency(
+        rng.random(params.carriers),
+        growing=params.growing,
+        horizon=params.horizon,
+        horizon_s=params.scenario.urgency.static_horizon,
+    )
+
+    def robots_apart(p: Float, others: Float) -> bool:
+        return bool(np.all(length(others - p) >= 2 * radius))
+
+    robot_pos = _place(
+        rng,
+        params.robots,
+        low=np.array([params.dropoff_left + radius, radius]),
+        high=np.array([arena - radius, arena - radius]),
+        far_enough=robots_apart,
+        what="robots",
+    )
+    heading = unit_vectors(rng.standard_normal((params.robots, 2)))
+    factor = np.clip(1.0 + params.speed_variation * rng.standard_normal(params.robots), 0.5, 1.5)
+    phase = rng.random(params.carriers)
+    return Scene(
+        robot_pos=robot_pos,
+        carrier_pos=carrier_pos,
+        urgency0=urgency.urgency0,
+        order_time=urgency.order_time,
+        w0=urgency.w0,
+        heading=heading,
+        speed_factor=factor,
+        status=np.full(params.carriers, TagStatus.AWAITING_PICKUP, dtype=np.int8),
+        advert_phase=phase,
+    )

@@ -1,0 +1,1 @@
+"""What a run leaves behind: trajectories, pictures and MCAP files."""

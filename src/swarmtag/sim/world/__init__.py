@@ -1,0 +1,1 @@
+"""The world's phases of a tick: sensing, motion and collisions, handling, orders, urgency."""

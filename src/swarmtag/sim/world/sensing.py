@@ -1,0 +1,250 @@
+"""Phase 1 of a tick, sense: what each robot hears and sees (SPEC §4.2, §4.2a, §4.5).
+
+Robots sense the world as it was at the end of the previous tick. Tags
+advertise their state of ``status_delay`` ticks earlier; each robot keeps
+the last status and urgency it heard per tag (its BLE cache). Two models:
+
+- **split** (radio and camera apart, as on the robot). The radio hears tag
+  c when c is in the arena, within ``radio.range``, advertised during this
+  tick (once per advertising interval, at the tag's own phase, on a grid of
+  whole microseconds) and the advertisement is not lost. The camera sees
+  carrier c when it is in the arena and not carried, within
+  ``camera.range`` (centre to centre), and, with occlusion, the segment
+  between the centres crosses no other such carrier's footprint (nor, with
+  ``carriers+robots``, passes within a radius of another robot's centre).
+  A sighting records the tick and the position seen (true position plus
+  camera noise); the position is *known* while ``t - seen <= memory``.
+  Without memory, only what a robot can act on is looked at: robots that
+  were walking at the start of the tick, carriers they heard
+  AWAITING_PICKUP (nothing else can become a candidate, so the outcome is
+  the same and the costly line-of-sight tests are fewer).
+- **disc** (the model before profiles). Carrier c within
+  ``detection_radius`` is seen and heard (unless lost), every tick.
+
+The distance used for selection is from the robot to the known position.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmtag.sim.model.geometry import Float, length, segment_crosses_box, segment_near_point
+from swarmtag.sim.model.params import Params
+from swarmtag.sim.model.randomness import TickInputs
+from swarmtag.sim.model.state import Int, Mode, WorldState
+from swarmtag.sim.world.broad_phase import build_grid, grid_pays, near_segments
+from swarmtag.sim.world.floor import hidden_by_shelves
+from swarmtag.tag import TagStatus
+from swarmtag.tag.advertising import adverts_sent
+
+__all__ = [
+    "Senses",
+    "actionable",
+    "advertised",
+    "advertising",
+    "line_of_sight",
+    "sense",
+    "sensed_state",
+]
+
+_SIGHT_CELL: Final = 0.75
+"""Cell side (m) of the occluder grids: a line of sight spans a few such cells."""
+
+
+@dataclass(frozen=True, eq=False)
+class Senses:
+    """What the robots perceive this tick, shapes (R, N, C) (positions (R, N, C, 2))."""
+
+    known: NDArray[np.bool_]
+    """Carrier position known from the camera: seen now or, with memory, recently."""
+    distance: Float
+    """Distance from the robot to the carrier's known position (camera noise included)."""
+    known_status: NDArray[np.int8]
+    """Each robot's cache of tag statuses after this tick's advertisements (-1 never heard)."""
+    known_urgency: NDArray[np.int8]
+    """Each robot's cache of tag urgencies after this tick's advertisements."""
+    heard_tick: Int
+    """Tick in which each robot last heard each tag, this tick's included (-1 never)."""
+    seen_tick: Int
+    """Tick of each robot's last sighting of each carrier, this tick's included (-1 never)."""
+    seen_pos: Float
+    """Where each robot last saw each carrier."""
+
+
+def advertised(state: WorldState, params: Params) -> tuple[NDArray[np.int8], NDArray[np.int8]]:
+    """Status and urgency the tags advertise during tick ``state.tick + 1``, shapes (R, C)."""
+    slot = (state.tick - params.status_delay) % (params.status_delay + 1)
+    return state.adv_status[:, slot], state.adv_urgency[:, slot]
+
+
+def advertising(phase: Int, tick: int, params: Params) -> NDArray[np.bool_]:
+    """Which tags send an advertisement during ``tick`` (1-based), shape of ``phase``.
+
+    Tag c advertises at ``phase[c] + k * interval`` (microseconds); tick t
+    covers ``((t - 1) * tick, t * tick]``. Integer arithmetic only.
+
+    >>> from swarmtag.sim import Scenario, make_params
+    >>> from swarmtag.policy import Proximity
+    >>> p = make_params(Scenario(tick=0.1, perception="split"), Proximity())
+    >>> [bool(advertising(np.array([0]), t, p)[0]) for t in range(1, 6)]
+    [False, False, True, False, True]
+    """
+    sent: NDArray[np.bool_] = (
+        adverts_sent(phase, params.advert_us, (tick - 1) * params.tick_us, tick * params.tick_us)
+        > 0
+    )
+    return sent
+
+
+def actionable(state: WorldState, known_status: NDArray[np.int8]) -> NDArray[np.bool_]:
+    """(R, N, C): robots walking at the start of the tick and the carriers they heard awaiting.
+
+    Only these sightings can make a candidate when there is no sighting memory.
+    """
+    walking = (state.mode == Mode.WALK)[..., None]
+    awaiting: NDArray[np.bool_] = walking & (known_status == TagStatus.AWAITING_PICKUP)
+    return awaiting
+
+
+def line_of_sight(
+    state: WorldState, visible: NDArray[np.bool_], params: Params
+) -> NDArray[np.bool_]:
+    """``visible`` (R, N, C) with the sightings whose line of sight is blocked removed.
+
+    Occluders: other carriers in the arena and not carried (their squares),
+    a warehouse's shelves, and with ``carriers+robots`` the other robots
+    (their discs). Many
+    occluders: only those near each line are tested
+    (``swarmtag.sim.world.broad_phase``; the same result).
+    """
+    runs, robots, carriers = np.nonzero(visible)
+    if runs.size == 0:
+        return visible
+    start = state.robot_pos[runs, robots]  # (K, 2)
+    end = state.carrier_pos[runs, carriers]
+    obstacle = state.present & (state.carried_by < 0)
+    if not grid_pays("sight", runs.size, obstacle.shape[1]):
+        others = state.carrier_pos[runs]  # (K, C, 2)
+        blocking = obstacle[runs]
+        blocking &= np.arange(state.carrier_pos.shape[1])[None, :] != carriers[:, None]
+        half = params.carrier_half
+        crosses = segment_crosses_box(start[:, None, :], end[:, None, :], others, half)
+        blocked = (crosses & blocking).any(axis=1)
+    else:
+        blocked = _hidden_by_carriers(state, obstacle, (runs, carriers, start, end), params)
+    if params.floor is not None:
+        blocked |= hidden_by_shelves(start, end, params.floor)
+    if params.occlusion >= 2:
+        if not grid_pays("sight", runs.size, state.robot_pos.shape[1]):
+            bodies = state.robot_pos[runs]  # (K, N, 2)
+            radius = params.robot_radius
+            near = segment_near_point(start[:, None, :], end[:, None, :], bodies, radius)
+            near &= np.arange(state.robot_pos.shape[1])[None, :] != robots[:, None]
+            blocked |= near.any(axis=1)
+        else:
+            blocked |= _hidden_by_robots(state, (runs, robots, start, end), params)
+    result = visible.copy()
+    result[runs[blocked], robots[blocked], carriers[blocked]] = False
+    return result
+
+
+_Lines = tuple[Int, Int, Float, Float]
+"""Sightings: run, robot or carrier, start (K, 2), end (K, 2)."""
+
+
+def _hidden_by_carriers(
+    state: WorldState, obstacle: NDArray[np.bool_], lines: _Lines, params: Params
+) -> NDArray[np.bool_]:
+    """(K,): lines that cross another obstacle carrier's square (grid).
+
+    A segment crosses the square only if the square's centre lies within
+    ``carrier_half`` of the segment's bounding box.
+    """
+    runs, carriers, start, end = lines
+    half = params.carrier_half
+    pos = state.carrier_pos
+    grid = build_grid(pos[..., 0], pos[..., 1], obstacle, _SIGHT_CELL)
+    line, other = near_segments(grid, runs, start, end, half)
+    crosses = segment_crosses_box(start[line], end[line], pos[runs[line], other], half)
+    crosses &= other != carriers[line]
+    blocked = np.zeros(runs.size, dtype=bool)
+    blocked[line[crosses]] = True
+    return blocked
+
+
+def _hidden_by_robots(state: WorldState, lines: _Lines, params: Params) -> NDArray[np.bool_]:
+    """(K,): lines that pass closer than a robot radius to another robot (grid)."""
+    runs, robots, start, end = lines
+    radius = params.robot_radius
+    pos = state.robot_pos
+    everyone = np.ones(pos.shape[:2], dtype=bool)
+    grid = build_grid(pos[..., 0], pos[..., 1], everyone, _SIGHT_CELL)
+    line, other = near_segments(grid, runs, start, end, radius)
+    near = segment_near_point(start[line], end[line], pos[runs[line], other], radius)
+    near &= other != robots[line]
+    blocked = np.zeros(runs.size, dtype=bool)
+    blocked[line[near]] = True
+    return blocked
+
+
+def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
+    """Detections and the updated tag caches, from ``state`` (the end of the previous tick)."""
+    t = state.tick + 1
+    offset = state.carrier_pos[:, None, :, :] - state.robot_pos[:, :, None, :]  # (R, N, C, 2)
+    distance = length(offset)
+    present = state.present[:, None, :]
+    if params.split:
+        heard = present & (distance <= params.radio_range)
+        heard &= advertising(state.advert_phase, t, params)[:, None, :]
+        visible = present & (state.carried_by < 0)[:, None, :] & (distance <= params.camera_range)
+    else:
+        heard = visible = present & (distance <= params.detection_radius)
+    if inputs.heard is not None:
+        heard = heard & inputs.heard
+    status, urgency = advertised(state, params)
+    known_status = np.where(heard, status[:, None, :], state.known_status)
+    known_urgency = np.where(heard, urgency[:, None, :], state.known_urgency)
+    heard_tick = np.where(heard, t, state.heard_tick)
+    if params.split and params.memory_ticks == 0:
+        visible = visible & actionable(state, known_status)
+    if params.split and params.occlusion:
+        visible = line_of_sight(state, visible, params)
+
+    seen = state.carrier_pos[:, None, :, :]
+    if inputs.noise is not None:
+        seen = seen + inputs.noise
+    seen_pos = np.where(visible[..., None], seen, state.seen_pos)
+    seen_tick = np.where(visible, t, state.seen_tick)
+    if params.split and params.memory_ticks > 0:
+        known = (seen_tick >= 0) & (t - seen_tick <= params.memory_ticks)
+        known &= present
+        measured = length(seen_pos - state.robot_pos[:, :, None, :])
+    else:
+        known = visible
+        measured = distance if inputs.noise is None else length(offset + inputs.noise)
+    return Senses(
+        known=known,
+        distance=measured,
+        known_status=known_status,
+        known_urgency=known_urgency,
+        heard_tick=heard_tick,
+        seen_tick=seen_tick,
+        seen_pos=seen_pos,
+    )
+
+
+def sensed_state(state: WorldState, senses: Senses) -> WorldState:
+    """A copy of ``state`` as tick ``state.tick + 1`` begins, with the caches of ``senses``."""
+    return replace(
+        state.copy(),
+        tick=state.tick + 1,
+        known_status=senses.known_status,
+        known_urgency=senses.known_urgency,
+        heard_tick=senses.heard_tick,
+        seen_tick=senses.seen_tick,
+        seen_pos=senses.seen_pos,
+    )

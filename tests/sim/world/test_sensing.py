@@ -1,0 +1,205 @@
+"""Split perception (SPEC §4.2a) on hand-built scenes: radio, camera, occlusion, memory.
+
+Scenes use the base defaults (tick 0.1 s, step 0.05 m, carrier half side
+0.1775 m, robot radius 0.125 m); robots walk along the scripted direction.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from swarmtag.policy import Proximity, Urgency
+from swarmtag.sim import Scene, TickInputs, initial_state, make_params, run_batch
+from swarmtag.sim.config.profiles import load_profile
+from swarmtag.sim.world.sensing import advertising
+from swarmtag.tag import TagStatus
+from tests.sim.helpers import event_rows, run_script
+
+IDLE = int(TagStatus.IDLE)
+
+
+def split_params(policy=None, *, robots=1, carriers=1, **values):
+    """Base-profile parameters with split perception and ``values`` (dotted keys) on top."""
+    layers = {"perception": "split", "robots": robots, "carriers": carriers, **values}
+    return make_params(load_profile("base").scenario(layers), policy or Proximity())
+
+
+def test_tags_advertise_once_per_interval_at_their_own_phase():
+    params = split_params(
+        carriers=3, **{"radio.interval": 0.25}
+    )  # 0.1 s ticks: 2.5 ticks per advert
+    phase = np.array([0, 50_000, 249_999])  # microseconds into the interval
+    sent = np.array([advertising(phase, t, params) for t in range(1, 11)])
+    # adverts at phase + k * 0.25 s fall in tick t when in ((t - 1) * 0.1, t * 0.1];
+    # row i is tick i + 1
+    assert np.flatnonzero(sent[:, 0]).tolist() == [2, 4, 7, 9]  # 0.25, 0.5, 0.75, 1.0 s
+    assert np.flatnonzero(sent[:, 1]).tolist() == [0, 2, 5, 7]  # 0.05, 0.3, 0.55, 0.8 s
+    assert np.flatnonzero(sent[:, 2]).tolist() == [2, 4, 7, 9]  # 0.249999 s, ...
+
+
+@pytest.mark.parametrize(
+    ("robot_x", "selected"),
+    [(1.5, True), (np.nextafter(1.5, 2.0), False)],
+    ids=["exactly-camera-range", "just-beyond"],
+)
+def test_camera_range_is_inclusive_and_the_radio_alone_is_not_enough(robot_x, selected):
+    # radio range 10 m hears the tag every tick (interval = one tick); the camera sees 1 m
+    params = split_params(**{"camera.range": 1.0, "radio.interval": 0.1})
+    scene = Scene.build(robots=[(robot_x, 2.0)], carriers=[(0.5, 2.0)], urgency=[5])
+    result = run_script(params, scene, 5, walk=(1.0, 0.0))
+    assert event_rows(result) == ([(1, "select", 0, 0)] if selected else [])
+    assert result.final_state.known_status[0, 0, 0] == TagStatus.AWAITING_PICKUP
+
+
+def test_a_carrier_seen_but_not_yet_heard_is_no_candidate():
+    # one advert per second, the tag's first in tick 4 (0.35 s into the interval)
+    params = split_params(**{"camera.range": 1.0, "radio.interval": 1.0})
+    scene = Scene.build(robots=[(1.0, 2.0)], carriers=[(0.5, 2.0)], advert_phase=[0.35])
+    result = run_script(params, scene, 6, walk=(0.0, 1.0))
+    assert event_rows(result) == [(4, "select", 0, 0)]
+
+
+def test_radio_range_bounds_what_is_heard():
+    params = split_params(**{"camera.range": 1.0, "radio.range": 0.4, "radio.interval": 0.1})
+    scene = Scene.build(robots=[(1.0, 2.0)], carriers=[(0.5, 2.0)])
+    result = run_script(params, scene, 3, walk=(0.0, 1.0))
+    assert event_rows(result) == []  # seen at 0.5 m but not heard beyond 0.4 m
+    assert result.final_state.known_status[0, 0, 0] == -1
+
+
+def _shadow_scene():
+    # carrier 1 sits between the robot and carrier 0 on the line y = 2
+    return Scene.build(
+        robots=[(1.4, 2.0)],
+        carriers=[(0.3, 2.0), (0.9, 2.0)],
+        status=[int(TagStatus.AWAITING_PICKUP), IDLE],
+        urgency=[5, 5],
+    )
+
+
+@pytest.mark.parametrize(("occlusion", "seen"), [("none", True), ("carriers", False)])
+def test_other_carriers_block_the_line_of_sight(occlusion, seen):
+    # a little memory, so that every sighting is recorded (without memory only those a
+    # walking robot can act on are looked at: carriers it heard AWAITING_PICKUP)
+    params = split_params(
+        carriers=2,
+        **{
+            "camera.range": 1.5,
+            "camera.occlusion": occlusion,
+            "camera.memory": 0.1,
+            "radio.interval": 0.1,
+        },
+    )
+    result = run_script(params, _shadow_scene(), 1, walk=(1.0, 0.0))
+    assert result.final_state.seen_tick[0, 0].tolist() == [1 if seen else -1, 1]
+    assert event_rows(result) == ([(1, "select", 0, 0)] if seen else [])
+
+
+@pytest.mark.parametrize(("occlusion", "seen"), [("carriers", True), ("carriers+robots", False)])
+def test_robots_block_the_line_of_sight_only_when_asked(occlusion, seen):
+    params = split_params(
+        robots=2,
+        **{
+            "camera.range": 1.5,
+            "camera.occlusion": occlusion,
+            "camera.memory": 0.1,
+            "radio.interval": 0.1,
+        },
+    )
+    scene = Scene.build(
+        robots=[(1.4, 2.0), (0.9, 2.0)], carriers=[(0.3, 2.0)], urgency=[5], status=[IDLE]
+    )
+    result = run_script(params, scene, 1, walk=(0.0, 1.0))
+    assert bool(result.final_state.seen_tick[0, 0, 0] == 1) is seen
+    assert result.final_state.seen_tick[0, 1, 0] == 1  # the robot in front sees it
+
+
+@pytest.mark.parametrize(("memory", "selected"), [(0.0, False), (0.5, True)])
+def test_sighting_memory_keeps_a_carrier_a_candidate_after_it_left_the_view(memory, selected):
+    # The robot sees the carrier at tick 1 (0.45 m) and walks away at 0.05 m per tick,
+    # leaving the 0.5 m camera range after tick 2; the tag's first advert comes in
+    # tick 5. With 0.5 s (5 ticks) of memory the sighting of tick 2 still counts.
+    params = split_params(**{"camera.range": 0.5, "camera.memory": memory, "radio.interval": 1.0})
+    scene = Scene.build(robots=[(0.95, 2.0)], carriers=[(0.5, 2.0)], advert_phase=[0.45])
+    result = run_script(params, scene, 6, walk=(1.0, 0.0))
+    # without memory nothing unheard is looked at; with it the last sighting is tick 2
+    assert result.final_state.seen_tick[0, 0, 0] == (2 if memory else -1)
+    assert event_rows(result) == ([(5, "select", 0, 0)] if selected else [])
+
+
+def test_a_remembered_carrier_is_forgotten_after_the_horizon():
+    params = split_params(**{"camera.range": 0.5, "camera.memory": 0.2, "radio.interval": 1.0})
+    scene = Scene.build(robots=[(0.95, 2.0)], carriers=[(0.5, 2.0)], advert_phase=[0.45])
+    result = run_script(params, scene, 6, walk=(1.0, 0.0))
+    assert event_rows(result) == []  # last seen at tick 2, 3 ticks before the advert
+
+
+def test_candidates_events_count_what_the_robot_chose_among():
+    params = split_params(
+        Urgency(alpha=0.7), carriers=3, **{"camera.range": 1.2, "radio.interval": 0.1}
+    )
+    scene = Scene.build(
+        robots=[(1.4, 2.0)],
+        carriers=[(0.5, 1.4), (0.5, 2.6), (0.4, 0.3)],
+        urgency=[2, 8, 9],
+    )
+    result = run_script(params, scene, 1, walk=(0.0, 1.0))
+    assert event_rows(result, candidates=True) == [(1, "select", 0, 1), (1, "candidates", 0, 1)]
+    assert result.events.value.tolist() == [8.0, 2.0]  # the urgent one of the two it sees
+
+
+def test_a_correlated_walk_turns_every_interval_by_the_drawn_angle():
+    params = split_params(**{"walk.turn_interval": 0.3})  # every 3 ticks
+    scene = Scene.build(robots=[(2.0, 2.0)], carriers=[(0.3, 0.3)], status=[IDLE])
+    quarter = np.array([[[0.0, 1.0]]])  # (cos, sin) of +90 degrees
+
+    class Turning:
+        def inputs(self, tick):
+            inputs = TickInputs.fixed(1, 1, walk=(1.0, 0.0))
+            return TickInputs(
+                walk=inputs.walk, sidestep=inputs.sidestep, breakdown=inputs.breakdown,
+                turn=quarter,
+            )  # fmt: skip
+
+    state = initial_state(params, [scene], [0])
+    result = run_batch(state, params, Turning(), ticks=7, check=True)
+    # heading +x for ticks 1-2, turned at tick 3 (+y), 6 (-x): positions follow
+    walk = result.final_state.walk[0, 0]
+    assert walk == pytest.approx([-1.0, 0.0], abs=1e-12)
+    expected = np.array([2.0, 2.0]) + 0.05 * np.array([2, 0]) + 0.05 * np.array([0, 3])
+    expected += 0.05 * np.array([-2, 0])
+    assert result.final_state.robot_pos[0, 0] == pytest.approx(expected, abs=1e-12)
+
+
+def test_without_memory_only_actionable_sightings_are_looked_at_and_choices_are_the_same():
+    # Restricting the camera to walking robots and carriers they heard AWAITING_PICKUP
+    # changes no candidate: the full line-of-sight computation gives the same ones.
+    from swarmtag.sim import RandomSource, step
+    from swarmtag.sim.runner import seeded_state
+    from swarmtag.sim.world.sensing import actionable, line_of_sight, sense
+
+    params = make_params(
+        load_profile("base").scenario(
+            {"perception": "split", "camera.range": 3.6, "camera.occlusion": "carriers+robots"}
+        ),
+        Urgency(alpha=3.0),
+    )
+    state = seeded_state(params, seed=3, runs=12)
+    source = RandomSource(params, seed=3, run_ids=state.run_ids)
+    compared = 0
+    for tick in range(1, 400):
+        inputs = source.inputs(tick)
+        senses = sense(state, inputs, params)
+        offset = state.carrier_pos[:, None, :, :] - state.robot_pos[:, :, None, :]
+        in_view = (
+            state.present[:, None, :]
+            & (state.carried_by < 0)[:, None, :]
+            & (np.sqrt((offset**2).sum(axis=-1)) <= params.camera_range)
+        )
+        full = line_of_sight(state, in_view, params)
+        relevant = actionable(state, senses.known_status)
+        assert np.array_equal(senses.known, full & relevant)
+        compared += int(relevant.sum())
+        state, _ = step(state, inputs, params)
+    assert compared > 300
