@@ -224,7 +224,7 @@ def test_code_version_changes_with_the_model_source(monkeypatch, tmp_path):
     # A copy of the package with one kernel byte changed gets another digest.
     root = tmp_path / "swarmtag"
     shutil.copytree(Path(spec.__file__).resolve().parents[1], root)
-    kernel = root / "sim" / "kernel.py"
+    kernel = root / "sim" / "model" / "step.py"
     kernel.write_bytes(kernel.read_bytes() + b"\n# changed\n")
     monkeypatch.setattr(spec, "__file__", str(root / "experiments" / "spec.py"))
     spec.model_digest.cache_clear()
