@@ -26,7 +26,7 @@ from _results import begin
 
 from swarmtag.policy import Urgency
 from swarmtag.sim import Scenario, SimResult, simulate
-from swarmtag.sim.checks import run_csv
+from swarmtag.sim.determinism import run_csv
 
 
 class Case(NamedTuple):

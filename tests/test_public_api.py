@@ -58,7 +58,6 @@ ENTRY_POINTS = {
     "load_profile": "swarmtag.sim",
     "parse_policy": "swarmtag.policy",
     "read_event_log": "swarmtag.io",
-    "simulate": "swarmtag.sim",
     "summarize": "swarmtag.analysis",
 }
 """What ``import swarmtag`` offers (on first use), by home module."""
@@ -88,3 +87,5 @@ def test_the_top_level_offers_the_entry_points_and_the_version_only():
     assert set(swarmtag.__all__) == {*ENTRY_POINTS, "__version__"}
     with pytest.raises(AttributeError, match="has no attribute 'nope'"):
         _ = swarmtag.nope
+    with pytest.raises(AttributeError, match="has no attribute 'simulate'"):
+        _ = swarmtag.simulate  # reserved for the notebook API of SPEC §8.5

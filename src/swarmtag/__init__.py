@@ -12,13 +12,17 @@ The main entry points are offered here too, imported on first use so that
 
     import swarmtag
 
-    result = swarmtag.simulate(swarmtag.Scenario(), swarmtag.parse_policy("urgency:alpha=0.7"),
-                               seed=0, runs=10)
-    swarmtag.summarize(result.carriers)
+    log = swarmtag.read_event_log("trial.csv")
+    report = swarmtag.summarize(log)
+    scenario = swarmtag.Scenario.default(5, 10)
+    policy = swarmtag.parse_policy("urgency:alpha=0.7")
 
-``simulate``, ``Scenario``, ``load_profile`` and ``BUILTIN`` are
-``swarmtag.sim``'s, ``parse_policy`` is ``swarmtag.policy``'s,
-``read_event_log`` ``swarmtag.io``'s and ``summarize`` ``swarmtag.analysis``'s.
+``Scenario``, ``load_profile`` and ``BUILTIN`` are ``swarmtag.sim``'s,
+``parse_policy`` is ``swarmtag.policy``'s, ``read_event_log``
+``swarmtag.io``'s and ``summarize`` ``swarmtag.analysis``'s. Simulating is
+``swarmtag.sim.simulate(scenario, policy, ...)``; the name
+``swarmtag.simulate`` is kept for the notebook API of SPEC §8.5 (several
+conditions in one call, results as DataFrames), whose signature differs.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ if TYPE_CHECKING:
     from swarmtag.analysis import summarize
     from swarmtag.io import read_event_log
     from swarmtag.policy import parse_policy
-    from swarmtag.sim import BUILTIN, Scenario, load_profile, simulate
+    from swarmtag.sim import BUILTIN, Scenario, load_profile
 
 __all__ = [
     "BUILTIN",
@@ -37,7 +41,6 @@ __all__ = [
     "load_profile",
     "parse_policy",
     "read_event_log",
-    "simulate",
     "summarize",
 ]
 
@@ -50,7 +53,6 @@ _LAZY = {
     "load_profile": "swarmtag.sim",
     "parse_policy": "swarmtag.policy",
     "read_event_log": "swarmtag.io",
-    "simulate": "swarmtag.sim",
     "summarize": "swarmtag.analysis",
 }
 """The entry points offered here, by the module that defines them (imported on first use)."""

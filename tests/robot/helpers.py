@@ -6,7 +6,7 @@ from typing import Any
 
 from swarmtag.policy import Policy
 from swarmtag.sim import Scenario, simulate
-from swarmtag.sim.checks import run_csv
+from swarmtag.sim.determinism import run_csv
 
 REALISM = {
     "advertisement_loss": 0.3,

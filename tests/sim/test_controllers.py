@@ -10,8 +10,8 @@ from swarmtag.errors import ConfigError
 from swarmtag.policy import Proximity, Urgency
 from swarmtag.sim import BUILTIN, Scenario, check_controller, simulate
 from swarmtag.sim.builtin.controller import BuiltinController
-from swarmtag.sim.checks import run_csv
 from swarmtag.sim.controllers import controller_names, is_controller, named_controller
+from swarmtag.sim.determinism import run_csv
 from swarmtag.sim.model.state import Mode
 
 SCENARIO = replace(Scenario.default(3, 7), ticks=400)

@@ -21,7 +21,7 @@ from swarmtag.sim import (
     check_determinism,
     simulate,
 )
-from swarmtag.sim.checks import run_csv
+from swarmtag.sim.determinism import run_csv
 
 SCENARIO = Scenario(
     ticks=500,
@@ -48,7 +48,7 @@ _CHILD = """
 import hashlib, sys
 from swarmtag.policy import Proximity
 from swarmtag.sim import Realism, Reprioritisation, Scenario, simulate
-from swarmtag.sim.checks import run_csv
+from swarmtag.sim.determinism import run_csv
 scenario = Scenario(
     ticks=500,
     detection_radius=2.0,
@@ -81,7 +81,7 @@ def test_same_initial_scene_under_every_policy():
 
 
 def test_the_check_reports_a_run_that_differs(monkeypatch):
-    from swarmtag.sim import checks
+    from swarmtag.sim import determinism as checks
 
     real = checks.simulate
     calls = []

@@ -42,7 +42,7 @@ For other front ends and for tests, the layers underneath:
 Everything else (random-stream layout, invariants, controller memory fields,
 the world's phases, the compiled kernel) is imported from its module:
 ``swarmtag.sim.model``, ``swarmtag.sim.world``, ``swarmtag.sim.control``,
-``swarmtag.sim.runner``, ``swarmtag.sim.checks``, ``swarmtag.sim.fast``.
+``swarmtag.sim.runner``, ``swarmtag.sim.determinism``, ``swarmtag.sim.fast``.
 See docs/simulator.md for the model, the defaults and the random-stream layout.
 """
 
@@ -50,7 +50,6 @@ from __future__ import annotations
 
 from swarmtag.sim.backends import FAST, REFERENCE, Backend
 from swarmtag.sim.builtin.controller import BUILTIN, BuiltinController
-from swarmtag.sim.checks import check_common_scenes, check_determinism
 from swarmtag.sim.config.parts import (
     Arena,
     Bodies,
@@ -67,6 +66,7 @@ from swarmtag.sim.config.sensors import Camera, Radio
 from swarmtag.sim.config.warehouse import Warehouse
 from swarmtag.sim.conformance import Divergence, check_controller
 from swarmtag.sim.control.interface import Arrivals, Carrying, Controller, LiftAnswers
+from swarmtag.sim.determinism import check_common_scenes, check_determinism
 from swarmtag.sim.model.events import EventKind, TickEvents
 from swarmtag.sim.model.params import Params, make_params
 from swarmtag.sim.model.randomness import RandomSource, TickInputs

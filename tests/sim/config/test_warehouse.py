@@ -17,8 +17,8 @@ from swarmtag.errors import ConfigError
 from swarmtag.io import format_csv
 from swarmtag.policy import Proximity
 from swarmtag.sim import Scenario, simulate
-from swarmtag.sim.checks import run_csv
 from swarmtag.sim.config.warehouse import Warehouse
+from swarmtag.sim.determinism import run_csv
 from swarmtag.sim.outputs.render import snapshot
 from swarmtag.sim.outputs.trajectories import Trajectories
 

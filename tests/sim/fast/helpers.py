@@ -8,7 +8,7 @@ import numpy as np
 
 from swarmtag.policy import Policy
 from swarmtag.sim import Scenario, SimResult, WorldState, simulate
-from swarmtag.sim.checks import run_csv
+from swarmtag.sim.determinism import run_csv
 
 TAG_CACHES = (
     "blocked_until",

@@ -24,8 +24,8 @@ from swarmtag.sim import (
     simulate,
 )
 from swarmtag.sim.backends import FAST, REFERENCE, resolve_backend
-from swarmtag.sim.checks import run_csv
 from swarmtag.sim.control import rules
+from swarmtag.sim.determinism import run_csv
 from swarmtag.sim.fast import _docking, _scene
 from swarmtag.sim.fast._index import index_robots
 from swarmtag.sim.fast._layout import _KERNEL_ONLY, Constants, World, constants_of

@@ -39,7 +39,15 @@ from swarmtag.sim.config.parts import (
 from swarmtag.sim.config.sensors import PERCEPTION_MODELS, Camera, Radio
 from swarmtag.sim.config.warehouse import Warehouse, floor_of
 
-__all__ = ["MAX_CARRIERS", "MAX_ROBOTS", "MAX_TICK", "MIN_TICK", "TIME_UNITS", "Scenario"]
+__all__ = [
+    "MAX_CARRIERS",
+    "MAX_ROBOTS",
+    "MAX_TICK",
+    "MIN_TICK",
+    "PARTS",
+    "TIME_UNITS",
+    "Scenario",
+]
 
 MAX_CARRIERS: Final = 256
 """Marker ids are one byte on the wire (SPEC §2.1): carriers are numbered 0-255."""
@@ -51,6 +59,18 @@ MAX_TICK: Final = 3600.0
 """Longest tick in seconds."""
 _TIMING_FIELDS: Final = ("dock", "lift", "release", "pursuit_timeout", "cooldown")
 TIME_UNITS: Final = ("tick", "s")
+PARTS: Final[tuple[tuple[str, type], ...]] = (
+    ("arena", Arena),
+    ("bodies", Bodies),
+    ("motion", Motion),
+    ("walk", Walk),
+    ("radio", Radio),
+    ("camera", Camera),
+    ("timing", Timing),
+    ("urgency", UrgencyModel),
+    ("realism", Realism),
+)
+"""The scenario's parts (each declared with the parameter schema), by their TOML name."""
 """``Scenario.time_unit``: event-log times in ticks, or in seconds of robot time."""
 
 
@@ -123,17 +143,7 @@ class Scenario:
         object.__setattr__(self, "arena_scaling", scaling)
         if self.arena is None:
             object.__setattr__(self, "arena", Arena.scaled(carriers, scaling))
-        for name, kind in (
-            ("arena", Arena),
-            ("bodies", Bodies),
-            ("motion", Motion),
-            ("walk", Walk),
-            ("radio", Radio),
-            ("camera", Camera),
-            ("timing", Timing),
-            ("urgency", UrgencyModel),
-            ("realism", Realism),
-        ):
+        for name, kind in PARTS:
             part: object = getattr(self, name)
             if not isinstance(part, kind):
                 msg = f"{name}: {part!r} is not a {kind.__name__}"

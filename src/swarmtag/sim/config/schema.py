@@ -13,11 +13,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from dataclasses import MISSING, Field, dataclass, field, fields
+from dataclasses import Field, dataclass, field, fields
 from typing import TYPE_CHECKING, Any, Final, TypeVar
 
 from swarmtag._checks import check_bool, check_choice, check_int, check_number
-from swarmtag.errors import ConfigError
 
 if TYPE_CHECKING:
     from _typeshed import DataclassInstance
@@ -160,11 +159,3 @@ def check_part(part: DataclassInstance, prefix: str) -> None:
         kind = item.type if isinstance(item.type, str) else item.type.__name__
         value = _checked(f"{prefix}.{item.name}", kind, getattr(part, item.name), spec)
         object.__setattr__(part, item.name, value)
-
-
-def default_of(item: Field[Any]) -> object:
-    """A declared field's default."""
-    if item.default is MISSING:
-        msg = f"{item.name}: a scenario parameter needs a default"
-        raise ConfigError(msg)
-    return item.default

@@ -28,17 +28,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Final
 
 from swarmtag.errors import ConfigError
-from swarmtag.sim.config.parts import Arena, Bodies, Motion, Realism, Timing, UrgencyModel, Walk
-from swarmtag.sim.config.scenario import Scenario
+from swarmtag.sim.config.scenario import PARTS, Scenario
 from swarmtag.sim.config.schema import (
     AS_IS,
     Conversion,
     Kernel,
     KernelValue,
+    Spec,
     seconds_to_ticks,
     specs,
 )
-from swarmtag.sim.config.sensors import Camera, Radio
 from swarmtag.sim.config.warehouse import floor_of
 
 if TYPE_CHECKING:
@@ -57,20 +56,6 @@ class KernelParameter:
     doc: str
     derive: Callable[[Scenario], KernelValue]
     controller: bool = False
-
-
-PARTS: Final[tuple[tuple[str, type], ...]] = (
-    ("arena", Arena),
-    ("bodies", Bodies),
-    ("motion", Motion),
-    ("walk", Walk),
-    ("radio", Radio),
-    ("camera", Camera),
-    ("timing", Timing),
-    ("urgency", UrgencyModel),
-    ("realism", Realism),
-)
-"""The scenario's parts whose fields are declared with the schema, by their TOML name."""
 
 
 def _part(scenario: Scenario, name: str) -> DataclassInstance:
@@ -256,19 +241,17 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
 """Kernel parameters that combine several scenario fields (or top-level ones)."""
 
 
-def _from_field(part: str, name: str, spec_kernel: Kernel, kind: type, doc: str) -> KernelParameter:
-    conversion: Conversion = spec_kernel.conversion or AS_IS[kind]
+def _from_field(part: str, name: str, kind: type, spec: Spec, kernel: Kernel) -> KernelParameter:
+    """The kernel parameter of field ``part.name``, declared with ``spec``."""
+    conversion: Conversion = kernel.conversion or AS_IS[kind]
 
     def derive(scenario: Scenario) -> KernelValue:
-        item = _part(scenario, part)
-        spec = next(s for f, s in specs(item) if f.name == name)
-        return conversion.convert(getattr(item, name), scenario, spec)
+        return conversion.convert(getattr(_part(scenario, part), name), scenario, spec)
 
-    unit = conversion.unit
+    doc = f"{spec.doc} (``{part}.{name}``)"
     return KernelParameter(
-        spec_kernel.name, conversion.kind, unit, f"{doc} (``{part}.{name}``)", derive,
-        spec_kernel.controller,
-    )  # fmt: skip
+        kernel.name, conversion.kind, conversion.unit, doc, derive, kernel.controller
+    )
 
 
 _KINDS: Final = {"int": int, "float": float, "bool": bool, "str": str}
@@ -283,7 +266,7 @@ def kernel_parameters(
         for item, spec in specs(cls):
             if spec.kernel is not None:
                 kind = _KINDS[item.type] if isinstance(item.type, str) else item.type
-                found.append(_from_field(part, item.name, spec.kernel, kind, spec.doc))
+                found.append(_from_field(part, item.name, kind, spec, spec.kernel))
     return tuple(found)
 
 
