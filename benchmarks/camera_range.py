@@ -1,13 +1,13 @@
 """Measure the camera range of a rig on synthetic images (docs/perception.md shows the result).
 
-Writes, into --out (default docs/perception): range.png (the figure), range.md (the
+Writes, into --out (default docs/perception/RIG): range.png (the figure), range.md (the
 table), range.json (every number), examples.png (crops of a few of the study's kind of
 images) and prints the reliable range next to the simulator's camera ranges; the summary
 (reliable ranges, images, errors, wall time) with the machine's facts goes to
 benchmarks/results/ (--results FILE.json to choose; _results.py). Usage:
 
     .venv/bin/python benchmarks/camera_range.py [--rig dots-like] [--samples 40] [--seed 0]
-        [--quick] [--out DIR] [--results FILE.json]
+        [--bearings 0,15,30,45] [--quick] [--out DIR] [--results FILE.json]
 
 --quick: 8 samples per point on a coarse grid (a minute), for trying settings out; it
 writes into out/camera-range-quick unless --out is given, so the documented files stay.
@@ -53,7 +53,7 @@ def examples(rig, path: Path, seed: int) -> None:
 
     rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
     conditions = Conditions(blur=0.6, noise=3.0, exposure=0.9)
-    front = rig.camera("front")
+    front = rig.facing(10.0)
     tiles = []
     for distance, turn in ((0.75, 20.0), (1.5, -30.0), (2.5, 10.0)):
         placement = Placement.at(7, distance, 10.0, turn)
@@ -63,7 +63,7 @@ def examples(rig, path: Path, seed: int) -> None:
             f"id {found[0].marker}, {found[0].distance:.3f} m" if found else "not detected"
         )
         tiles.append((image, placement, note))
-    upward = rig.camera("upward")
+    upward = next(camera for camera in rig.cameras if camera.upward)
     placement = Placement(7, 0.02, -0.01, 15.0)
     image = render(upward, rig.carrier, [placement], conditions, rng=rng)
     tiles.append((image, None, "upward camera, carrier 2 cm ahead, 1 cm right"))
@@ -90,12 +90,17 @@ def main() -> None:
     parser.add_argument("--rig", default="dots-like")
     parser.add_argument("--samples", type=int, default=40)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--bearings",
+        default=",".join(f"{b:g}" for b in BEARINGS),
+        help="comma-separated bearings (deg from the robot's forward axis)",
+    )
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--out", type=Path, default=None, help="folder of the figure and table")
     args, record = begin(parser, __file__, flag="--results")
     rig = load_rig(args.rig)
     if args.out is None:
-        args.out = Path("out/camera-range-quick" if args.quick else "docs/perception")
+        args.out = Path("out/camera-range-quick" if args.quick else f"docs/perception/{rig.name}")
     args.out.mkdir(parents=True, exist_ok=True)
     distances = QUICK_DISTANCES if args.quick else DISTANCES
     samples = 8 if args.quick else args.samples
@@ -107,7 +112,7 @@ def main() -> None:
     study = run_range_study(
         rig,
         distances=distances,
-        bearings=BEARINGS,
+        bearings=tuple(float(b) for b in args.bearings.split(",")),
         samples=samples,
         seed=args.seed,
         nuisance=Nuisance(),

@@ -124,7 +124,7 @@ def test_rig_file_errors_name_the_file(tmp_path):
     with pytest.raises(PerceptionError, match="no such camera file"):
         load_rig(tmp_path / "missing.toml")
     with pytest.raises(PerceptionError, match="no such file or shipped rig"):
-        load_rig("dots")
+        load_rig("dots-lite")
 
 
 def test_a_rig_file_reads_back_and_a_camera_may_have_its_own_lens(tmp_path):

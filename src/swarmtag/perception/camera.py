@@ -58,7 +58,7 @@ Float = NDArray[np.float64]
 
 CAMERA_KINDS: Final = ("perimeter", "upward")
 """What a camera looks at: carriers' side markers around the robot, or the underside marker."""
-RIGS: Final = {"dots-like": "dots-like.toml"}
+RIGS: Final = {"dots": "dots.toml", "dots-like": "dots-like.toml"}
 """Shipped rig files (in ``swarmtag/perception/rigs/``), by name."""
 DEFAULT_RIG: Final = "dots-like"
 """The rig used when none is named."""
