@@ -78,6 +78,7 @@ def test_large_swarm_event_logs_are_identical(realism):
             reprioritisations=[{"tick": 300, "carrier": 1, "urgency": 9}],
         ),
         scenario(3, 7, perception="disc", ticks=600),
+        scenario(5, 10, "paper-sim", ticks=800, camera={"range": 1.5, "fade": 1.0}),
     ],
     ids=[
         "paper-sim",
@@ -86,6 +87,7 @@ def test_large_swarm_event_logs_are_identical(realism):
         "no-face-avoidance",
         "turns-writes",
         "disc",
+        "camera-fade",
     ],
 )
 def test_perception_and_walk_variants_are_identical(world):

@@ -229,6 +229,7 @@ def batch_memory(
             caches = 34.0 * robots * entries
         else:
             pair = 66.0 + (48.0 if realism.advertisement_loss or realism.detection_noise else 0.0)
+            pair += 8.0 if scenario.camera.fade else 0.0  # this tick's sight draws
             caches = pair * robots * carriers
         free = (  # the start state's free faces: a grid from a few dozen carriers on
             2000.0 * carriers if grid_pays("free", 4 * carriers, carriers) else 400.0 * carriers**2

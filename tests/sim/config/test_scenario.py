@@ -186,3 +186,14 @@ def test_scenarios_are_frozen_and_hashable():
     with pytest.raises(AttributeError):
         s.robots = 4  # type: ignore[misc]
     assert hash(s) == hash(Scenario())
+
+
+def test_a_camera_fade_is_at_most_twice_the_range():
+    from swarmtag.sim import Camera
+
+    assert Camera(range=1.5, fade=1.0).fade == 1.0
+    assert Camera(range=0.5, fade=1.0).fade == 1.0  # the ramp starts at the robot's centre
+    with pytest.raises(ConfigError, match=r"camera\.fade: 1\.2 is more than twice camera\.range"):
+        Camera(range=0.5, fade=1.2)
+    with pytest.raises(ConfigError, match=r"camera\.fade: -0\.1 is not a number"):
+        Camera(fade=-0.1)

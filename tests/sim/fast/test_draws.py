@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from swarmtag.policy import Urgency
-from swarmtag.sim import Realism, Scenario
+from swarmtag.sim import Camera, Realism, Scenario
 from swarmtag.sim.fast._draws import STREAMS, chunk_end, draw, draw_range, draw_units
 from swarmtag.sim.fast._geometry import unit_vector
 from swarmtag.sim.fast._layout import Constants, constants_of
@@ -39,11 +39,11 @@ def _draw_in_chunks(streams: np.ndarray, numbers: int, k: Constants, x: Scratch)
 
 
 def _states(seed: int) -> np.ndarray:
-    """Run 0's generator states of the tick's four streams, in ``draw``'s order."""
+    """Run 0's generator states of the tick's five streams, in ``draw``'s order."""
     return states_of([stream(seed, 0, purpose) for purpose in STREAMS])[None]
 
 
-DRAWN = ("walk_gaussians", "sidestep_gaussians", "breakdown_draw", "radio_draw", "noise")
+DRAWN = ("walk_gaussians", "sidestep_gaussians", "breakdown_draw", "radio_draw", "noise", "sight")
 
 
 @pytest.mark.parametrize("numbers", [1, 7, 512, 10_000])
@@ -52,7 +52,7 @@ def test_chunks_draw_the_numbers_of_one_draw(numbers, realism):
     scenario = Scenario.default(9, 5)
     if realism:
         imperfect = Realism(breakdown=0.001, advertisement_loss=0.2, detection_noise=0.03)
-        scenario = replace(scenario, realism=imperfect)
+        scenario = replace(scenario, realism=imperfect, camera=Camera(range=1.5, fade=1.0))
     params = make_params(scenario, Urgency(alpha=0.7))
     k = constants_of(params)
     whole, chunked = scratch_for(1, k, 256), scratch_for(1, k, 256)
@@ -66,6 +66,7 @@ def test_chunks_draw_the_numbers_of_one_draw(numbers, realism):
         assert np.abs(whole.noise).sum() > 0
         assert whole.radio_draw.sum() > 0
         assert whole.breakdown_draw.sum() > 0
+        assert whole.sight.sum() > 0
     np.testing.assert_array_equal(states[0], states[1])  # every stream left at the same place
     assert not np.array_equal(states[0], _states(3))  # and moved on
     assert chunks >= len(STREAMS)  # a chunk never spans two streams
@@ -75,7 +76,8 @@ def test_chunks_draw_the_numbers_of_one_draw(numbers, realism):
 
 def test_a_tick_draws_the_reference_streams_numbers():
     imperfect = Realism(breakdown=0.001, advertisement_loss=0.2, detection_noise=0.03)
-    scenario = replace(Scenario.default(9, 5), realism=imperfect)
+    fading = Camera(range=1.5, fade=1.0)
+    scenario = replace(Scenario.default(9, 5), realism=imperfect, camera=fading)
     params = make_params(scenario, Urgency(alpha=0.7))
     k = constants_of(params)
     x = scratch_for(1, k, 256)
@@ -83,7 +85,7 @@ def test_a_tick_draws_the_reference_streams_numbers():
     for _ in range(3):  # the third tick: each stream carries on where the last tick left it
         _draw_whole(states, k, x)
     n, c = params.robots, params.carriers
-    motion, breakdown, radio, camera = (stream(5, 0, purpose) for purpose in STREAMS)
+    motion, breakdown, radio, camera, sight = (stream(5, 0, purpose) for purpose in STREAMS)
     gaussians = motion.standard_normal((3, n, 4))[2]
     np.testing.assert_array_equal(x.walk_gaussians[0], gaussians[:, :2])
     np.testing.assert_array_equal(x.sidestep_gaussians[0], gaussians[:, 2:])
@@ -91,6 +93,8 @@ def test_a_tick_draws_the_reference_streams_numbers():
     np.testing.assert_array_equal(x.radio_draw[0], radio.random((3, n, c))[2])
     noise = camera.standard_normal((3, n, c, 2))[2] * params.detection_noise
     np.testing.assert_array_equal(x.noise[0], noise)
+    reach = params.camera_far - sight.random((3, n, c))[2] * params.camera_fade
+    np.testing.assert_array_equal(x.sight[0], reach)
 
 
 @numba.njit(cache=False)  # not cached: machine code cached here would keep old geometry code

@@ -67,6 +67,8 @@ CASES = {
     ),
     "robots-occlude": replace(PAPER, camera=Camera(range=3.6, occlusion="carriers+robots")),
     "no-occlusion-short-camera": replace(PAPER, camera=Camera(range=1.2, occlusion="none")),
+    "camera-fade": replace(PAPER, camera=Camera(range=1.5, fade=1.0, occlusion="carriers")),
+    "camera-fade-memory": replace(PAPER, camera=Camera(range=1.2, fade=0.8, memory=3.0)),
     "slow-radio": replace(PAPER, radio=Radio(range=3.0, interval=0.7)),
     "turning-walk": replace(PAPER, walk=Walk(turn_interval=0.4, turn_angle=75.0)),
     "reprioritised": replace(
@@ -137,6 +139,7 @@ cameras = st.builds(
     range=st.sampled_from([0.8, 1.5, 3.6]),
     occlusion=st.sampled_from(["none", "carriers", "carriers+robots"]),
     memory=st.sampled_from([0.0, 0.0, 1.0, 6.0]),
+    fade=st.sampled_from([0.0, 0.0, 0.5, 1.5]),
 )
 realisms = st.builds(
     Realism,
@@ -185,6 +188,7 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         LARGE,
         replace(LARGE, camera=Camera(range=3.6, occlusion="carriers+robots")),
         replace(LARGE, camera=Camera(range=0.3, occlusion="carriers+robots", memory=2.0)),
+        replace(LARGE, camera=Camera(range=1.0, fade=1.2, occlusion="carriers")),
         replace(LARGE, perception="disc", detection_radius=2.0),
         replace(LARGE, realism=Realism(advertisement_loss=0.2, detection_noise=0.02)),
         replace(LARGE, radio=Radio(range=0.8, interval=0.3)),  # the radio grid leaves tags out
@@ -198,6 +202,7 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         "grids",
         "robots-occlude",
         "memory",
+        "fade",
         "disc",
         "realism",
         "short-radio",

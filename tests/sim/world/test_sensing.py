@@ -203,3 +203,28 @@ def test_without_memory_only_actionable_sightings_are_looked_at_and_choices_are_
         compared += int(relevant.sum())
         state, _ = step(state, inputs, params)
     assert compared > 300
+
+
+@pytest.mark.parametrize(
+    ("fade", "expected"),
+    [(1.0, (1.0, 0.5, 0.0)), (0.0, (1.0, 1.0, 0.0))],
+    ids=["ramp", "hard-disc"],
+)
+def test_a_camera_fade_makes_camera_range_the_50_percent_detection_distance(fade, expected):
+    from swarmtag.sim import RandomSource
+    from swarmtag.sim.world.sensing import sense
+
+    # carriers 0.45 m (inside the ramp 0.5-1.5 m), 1.0 m (its middle), 1.55 m (beyond) away
+    params = split_params(
+        carriers=3, **{"camera.range": 1.0, "camera.fade": fade, "radio.interval": 0.1}
+    )
+    scene = Scene.build(robots=[(2.0, 2.0)], carriers=[(2.45, 2.0), (2.0, 3.0), (0.45, 2.0)])
+    state = initial_state(params, [scene], np.array([0]))
+    source = RandomSource(params, seed=3, run_ids=[0])
+    ticks = 400
+    seen = np.zeros(3)
+    for t in range(1, ticks + 1):
+        seen += sense(state, source.inputs(t), params).known[0, 0]
+    near, middle, far = seen / ticks
+    assert (near, far) == (expected[0], expected[2])
+    assert middle == pytest.approx(expected[1], abs=0.08)

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Final
 
+from swarmtag.errors import ConfigError
 from swarmtag.sim.config.parts import MAX_DURATION, MAX_LENGTH
 from swarmtag.sim.config.schema import CHOICE_INDEX, MICROSECONDS, TICKS, Kernel, check_part, param
 
@@ -70,8 +71,13 @@ class Camera:
     """The robot's four perimeter cameras, 360° together (split perception).
 
     ``range`` (m, robot centre to carrier centre) is where a carrier's ArUco
-    marker is read; ``occlusion`` says what blocks the line of sight between
-    the centres (``"none"``, other ``"carriers"``' footprints, or
+    marker is read: with ``fade`` 0 (a hard disc) every carrier within it is
+    seen; with ``fade`` > 0 it is the 50 % detection distance of a linear
+    ramp ``fade`` wide (every carrier seen within ``range - fade / 2``, none
+    beyond ``range + fade / 2``; each robot-carrier pair draws anew every
+    tick), the shape the camera range study measures
+    (docs/perception.md). ``occlusion`` says what blocks the line of sight
+    between the centres (``"none"``, other ``"carriers"``' footprints, or
     ``"carriers+robots"``); ``memory`` (s) is how long a robot remembers
     where it last saw a carrier (0: only what it sees now).
     """
@@ -100,6 +106,20 @@ class Camera:
         high=MAX_DURATION,
         kernel=Kernel("memory_ticks", TICKS),
     )
+    fade: float = param(
+        0.0,
+        unit="m",
+        doc="Width of the detection ramp centred on range (0: a hard disc).",
+        low=0.0,
+        high=MAX_LENGTH,
+        kernel=Kernel("camera_fade"),
+    )
 
     def __post_init__(self) -> None:
         check_part(self, "camera")
+        if self.fade > 2 * self.range:
+            msg = (
+                f"camera.fade: {self.fade!r} is more than twice camera.range {self.range!r} "
+                "(the ramp would start before the robot)"
+            )
+            raise ConfigError(msg)

@@ -45,6 +45,8 @@ class Constants(NamedTuple):
     """Disc perception: the detection radius; split: the camera range (as far as robots see).
     [m]
     """
+    camera_far: float
+    """Beyond this no carrier is seen: the camera range plus half its fade. [m]"""
     tick_us: int
     """The tick in whole microseconds: tags advertise on this grid. [us]"""
     walk_turn_ticks: int
@@ -93,6 +95,8 @@ class Constants(NamedTuple):
     """How long a robot remembers where it saw a carrier (0: not at all). (``camera.memory``)
     [ticks]
     """
+    camera_fade: float
+    """Width of the detection ramp centred on range (0: a hard disc). (``camera.fade``)"""
     dock_ticks: int
     """Centring under the carrier. (``timing.dock``) [ticks]"""
     lift_ticks: int
@@ -132,7 +136,7 @@ class Constants(NamedTuple):
     robot_grid: bool
     """Find each robot's neighbours with the grid (many robots), not a scan."""
     sight_cell: float
-    """Side of a coarse grid cell: the camera range (at least a cell)."""
+    """Side of a coarse grid cell: the camera's far reach (at least one)."""
     radio_grid: bool
     """Find the advertising tags each robot may hear with a grid."""
     radio_cell: float
@@ -177,6 +181,7 @@ PARAMETERS = (
     "turn_sin",
     "split",
     "detection_radius",
+    "camera_far",
     "tick_us",
     "walk_turn_ticks",
     "time_scale",
@@ -198,6 +203,7 @@ PARAMETERS = (
     "camera_range",
     "occlusion",
     "memory_ticks",
+    "camera_fade",
     "dock_ticks",
     "lift_ticks",
     "release_ticks",

@@ -2,10 +2,11 @@
 
 The numbers a tick draws (``randomness.RandomSource``: the walk's and the
 sidestep's directions of every robot, then its break-down draw, then its
-radio draws and its camera noise per carrier) are cut into *units*, one per
-robot and stream: units ``0 .. robots - 1`` are the robots' motion numbers,
-the next ``robots`` their break-down draws, then the radio's, then the
-camera's (a stream that is off has units that draw nothing). Drawing units
+radio draws, its camera noise and its sight draws per carrier) are cut into
+*units*, one per robot and stream: units ``0 .. robots - 1`` are the robots'
+motion numbers, the next ``robots`` their break-down draws, then the
+radio's, the camera's and the sight's (a stream that is off has units that
+draw nothing). Drawing units
 ``0 .. u``, then ``u .. draw_units(k)``, gives the same numbers as drawing them
 all at once: a split run's threads take the next tick's units in turn while
 they wait for each other (``_split``).
@@ -23,7 +24,7 @@ from swarmtag.sim.model.randomness import Stream
 
 __all__ = ["DRAW_CHUNK", "STREAMS", "chunk_end", "draw", "draw_range", "draw_units"]
 
-STREAMS = (Stream.MOTION, Stream.BREAKDOWN, Stream.RADIO, Stream.CAMERA)
+STREAMS = (Stream.MOTION, Stream.BREAKDOWN, Stream.RADIO, Stream.CAMERA, Stream.SIGHT)
 """The tick's streams, in the order they draw: the rows of a run's generator states."""
 DRAW_CHUNK = 512
 """Numbers a thread draws at a time for a split run (about 5 µs: a waiting thread is back soon)."""
@@ -31,8 +32,8 @@ DRAW_CHUNK = 512
 
 @inlined
 def draw_units(k: Constants) -> int:
-    """Units of a tick's numbers: one per robot and stream (four streams)."""
-    return 4 * k.robots
+    """Units of a tick's numbers: one per robot and stream (five streams)."""
+    return 5 * k.robots
 
 
 @inlined
@@ -44,7 +45,9 @@ def _numbers_per_unit(stream: int, k: Constants) -> int:
         return 1 if k.breakdown > 0 else 0
     if stream == 2:  # the streams' order: see the module docs
         return k.carriers if k.advertisement_loss > 0 else 0
-    return 2 * k.carriers if k.detection_noise > 0 else 0
+    if stream == 3:
+        return 2 * k.carriers if k.detection_noise > 0 else 0
+    return k.carriers if k.camera_fade > 0 else 0
 
 
 @inlined
@@ -58,23 +61,34 @@ def chunk_end(unit: int, numbers: int, k: Constants) -> int:
     return min(end, unit + max(1, numbers // per_unit))
 
 
-@inlined
-def _settings(k: Constants) -> tuple[int, int, float, float, float]:
-    """What the draws need of the constants: robots, carriers, the three realism rates."""
-    return k.robots, k.carriers, k.breakdown, k.advertisement_loss, k.detection_noise
+_Settings = tuple[int, int, float, float, float, float, float]
+_Buffers = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 @inlined
-def _buffers(
-    r: int, x: Scratch
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Run ``r``'s buffers of a tick's numbers: walk, sidestep, break-down, radio, camera."""
+def _settings(k: Constants) -> _Settings:
+    """What the draws need of the constants: robots, carriers, the realism rates, the fade."""
+    return (
+        k.robots,
+        k.carriers,
+        k.breakdown,
+        k.advertisement_loss,
+        k.detection_noise,
+        k.camera_far,
+        k.camera_fade,
+    )
+
+
+@inlined
+def _buffers(r: int, x: Scratch) -> _Buffers:
+    """Run ``r``'s buffers of a tick's numbers: walk, sidestep, break-down, radio, camera, sight."""
     return (
         x.walk_gaussians[r],
         x.sidestep_gaussians[r],
         x.breakdown_draw[r],
         x.radio_draw[r],
         x.noise[r],
+        x.sight[r],
     )
 
 
@@ -83,16 +97,16 @@ def _draw_numbers(
     first: int,
     stop: int,
     state: np.ndarray,
-    settings: tuple[int, int, float, float, float],
-    buffers: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    settings: _Settings,
+    buffers: _Buffers,
 ) -> None:
     """Units ``first .. stop - 1`` of a run's tick from its generators ``state`` into ``buffers``.
 
     ``state``: one row per stream in ``STREAMS``' order, advanced in place;
     each stream's state stays in registers while its units draw.
     """
-    robots, carriers, breakdown, advertisement_loss, detection_noise = settings
-    walk, sidestep, breakdowns, radio, noise = buffers
+    robots, carriers, breakdown, advertisement_loss, detection_noise, far, fade = settings
+    walk, sidestep, breakdowns, radio, noise, sight = buffers
     high, low, inc_high, inc_low = state[0, 0], state[0, 1], state[0, 2], state[0, 3]
     for n in range(max(first, 0), min(stop, robots)):
         g0, high, low = standard_normal(high, low, inc_high, inc_low)
@@ -122,6 +136,13 @@ def _draw_numbers(
                 noise[n, c, 0] = g0 * detection_noise
                 noise[n, c, 1] = g1 * detection_noise
         state[3, 0], state[3, 1] = high, low
+    if fade > 0:  # as RandomSource: how far each robot sees each carrier this tick
+        high, low, inc_high, inc_low = state[4, 0], state[4, 1], state[4, 2], state[4, 3]
+        for n in range(max(first, 4 * robots) - 4 * robots, min(stop, 5 * robots) - 4 * robots):
+            for c in range(carriers):
+                u, high, low = uniform(high, low, inc_high, inc_low)
+                sight[n, c] = far - u * fade
+        state[4, 0], state[4, 1] = high, low
 
 
 @jit
@@ -129,8 +150,8 @@ def _draw_numbers_called(
     first: int,
     stop: int,
     state: np.ndarray,
-    settings: tuple[int, int, float, float, float],
-    buffers: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    settings: _Settings,
+    buffers: _Buffers,
 ) -> None:
     """``_draw_numbers`` compiled once, as a call: see ``draw_range``."""
     _draw_numbers(first, stop, state, settings, buffers)

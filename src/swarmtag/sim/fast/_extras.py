@@ -19,7 +19,7 @@ EXTRAS: Final[tuple[tuple[str, str, str], ...]] = (
     ("carrier_bits", "int", "The same for the carriers' grid tables."),
     ("obstacle_grid", "bool", "Find each robot's obstacle carriers with the grid, not a scan."),
     ("robot_grid", "bool", "Find each robot's neighbours with the grid (many robots), not a scan."),
-    ("sight_cell", "float", "Side of a coarse grid cell: the camera range (at least a cell)."),
+    ("sight_cell", "float", "Side of a coarse grid cell: the camera's far reach (at least one)."),
     ("radio_grid", "bool", "Find the advertising tags each robot may hear with a grid."),
     ("radio_cell", "float", "Side of a radio grid cell: the radio range, padded against rounding."),
     ("sparse_cache", "bool", "Robots keep their tag caches as short lists (``Params``)."),

@@ -186,7 +186,7 @@ def constants_of(params: Params, cache_capacity: int = 0) -> Constants:
         floor_cell, rows, cols = floor.cell, floor.rows, floor.cols
     half, radius = params.carrier_half, params.robot_radius
     cell = max(2 * half, half + radius, 2 * radius)
-    sight = max(cell, params.camera_range)
+    sight = max(cell, params.camera_far)
     radio_scale = max(params.arena, params.arena_height)
     shared = {name: getattr(params, name) for name in PARAMETERS}
     return Constants(

@@ -113,6 +113,7 @@ class _Streams:
             Stream.BREAKDOWN: params.breakdown > 0,
             Stream.RADIO: params.advertisement_loss > 0,
             Stream.CAMERA: params.detection_noise > 0,
+            Stream.SIGHT: params.camera_fade > 0,
         }
         self.states = np.zeros((len(run_ids), len(STREAMS), STATE_WORDS), dtype=np.uint64)
         """(runs, streams, words): the kernel's generator states (``_pcg``), advanced in place."""

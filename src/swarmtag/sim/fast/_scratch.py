@@ -34,6 +34,8 @@ class Scratch(NamedTuple):
     breakdown_draw: F8
     radio_draw: F8
     noise: F8
+    sight: F8
+    """(R, N, C) how far each robot sees each carrier this tick (a camera fade; else (R, N, 0))."""
     seen_count: I8
     """(R, N) carriers each robot knows the position of this tick (its ``seen_*`` list)."""
     seen_list: I8
@@ -176,6 +178,7 @@ def scratch_for(runs: int, k: Constants, capacity: int) -> Scratch:
     memo = (runs, robots, 0 if k.sparse_cache else carriers)
     lost = (runs, robots, carriers if k.advertisement_loss > 0 else 0)
     noisy = (runs, robots, carriers if k.detection_noise > 0 else 0)
+    fading = (runs, robots, carriers if k.camera_fade > 0 else 0)
 
     def floats(*shape: int) -> F8:
         return np.zeros(shape, dtype=np.float64)
@@ -188,6 +191,7 @@ def scratch_for(runs: int, k: Constants, capacity: int) -> Scratch:
         breakdown_draw=floats(*n),
         radio_draw=floats(*lost),
         noise=floats(*noisy, 2),
+        sight=floats(*fading),
         seen_count=np.zeros(n, dtype=np.int64),
         seen_list=np.zeros(known, dtype=np.int64),
         seen_distance=floats(*known),

@@ -245,6 +245,15 @@ def _hear(r: int, n: int, t: int, slot: int, w: World, k: Constants, x: Scratch)
 
 
 @inlined
+def _reach(r: int, n: int, c: int, k: Constants, x: Scratch) -> float:
+    """How far robot ``n`` sees carrier ``c`` this tick: its draw of the camera's ramp, or range."""
+    if k.camera_fade > 0:
+        reach: float = x.sight[r, n, c]
+        return reach
+    return k.camera_range
+
+
+@inlined
 def _out_of_sight(r: int, rx: float, ry: float, k: Constants, x: Scratch) -> bool:
     """Whether every obstacle carrier is beyond the camera's range along x or y.
 
@@ -252,7 +261,7 @@ def _out_of_sight(r: int, rx: float, ry: float, k: Constants, x: Scratch) -> boo
     rounding: a carrier that far along one axis fails ``distance <= range``.
     """
     box = x.obstacle_box
-    far = k.camera_range * (1.0 + 1e-6) + 1e-9
+    far = k.camera_far * (1.0 + 1e-6) + 1e-9
     away: bool = (
         x.obstacle_count[r] == 0
         or rx - box[r, 1] > far
@@ -288,7 +297,7 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
                 r,
                 rx,
                 ry,
-                k.camera_range,
+                k.camera_far,
                 k.sight_cell,
                 k.carrier_bits,
                 x.sight_start,
@@ -302,7 +311,7 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
                 continue
             ox = w.carrier_pos[r, c, 0] - rx
             oy = w.carrier_pos[r, c, 1] - ry
-            if math.sqrt(ox * ox + oy * oy) <= k.camera_range:
+            if math.sqrt(ox * ox + oy * oy) <= _reach(r, n, c, k, x):
                 _camera(r, n, c, t, ox, oy, w, k, x)
 
 
@@ -333,7 +342,7 @@ def _sense_every_pair(r: int, t: int, lo: int, hi: int, w: World, k: Constants, 
             present = w.present[r, c]
             if k.split:
                 heard = present and distance <= k.radio_range and x.advertises[r, c]
-                visible = present and w.carried_by[r, c] < 0 and distance <= k.camera_range
+                visible = present and w.carried_by[r, c] < 0 and distance <= _reach(r, n, c, k, x)
             else:
                 heard = present and distance <= k.detection_radius
                 visible = heard

@@ -43,6 +43,8 @@ class ParamFields:
     """Disc perception: the detection radius; split: the camera range (as far as robots see).
     [m]
     """
+    camera_far: float
+    """Beyond this no carrier is seen: the camera range plus half its fade. [m]"""
     tick_us: int
     """The tick in whole microseconds: tags advertise on this grid. [us]"""
     walk_turn_ticks: int
@@ -91,6 +93,8 @@ class ParamFields:
     """How long a robot remembers where it saw a carrier (0: not at all). (``camera.memory``)
     [ticks]
     """
+    camera_fade: float
+    """Width of the detection ramp centred on range (0: a hard disc). (``camera.fade``)"""
     dock_ticks: int
     """Centring under the carrier. (``timing.dock``) [ticks]"""
     lift_ticks: int

@@ -193,6 +193,13 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
         controller=True,
     ),
     KernelParameter(
+        "camera_far",
+        float,
+        "m",
+        "Beyond this no carrier is seen: the camera range plus half its fade.",
+        lambda s: s.camera.range + s.camera.fade / 2,
+    ),
+    KernelParameter(
         "tick_us",
         int,
         "us",

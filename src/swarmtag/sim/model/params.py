@@ -77,6 +77,7 @@ def sparse_tag_cache(scenario: Scenario) -> bool:
         and scenario.camera.memory == 0
         and realism.advertisement_loss == 0
         and realism.detection_noise == 0
+        and scenario.camera.fade == 0
     )
     return exact and scenario.robots * scenario.carriers >= SPARSE_FROM_PAIRS
 

@@ -18,10 +18,14 @@ k   stream     draws
                ``(2u - 1) * a`` for the largest turn ``a``, as the unit
                vector ``(cos, sin)`` (the one place an angle meets a
                transcendental function, outside every kernel)
+6   sight      per tick ``random((N, C))``: with a camera fade, robot ``r``
+               sees carrier ``c`` only within ``far - u * fade``
+               (``camera_far``: the range plus half the fade), a linear
+               detection ramp centred on the camera range
 ==  =========  =============================================================
 
 Every tick draws the full block of each stream, used or not, so no number
-depends on what other robots did. Streams 2-5 are only drawn when their
+depends on what other robots did. Streams 2-6 are only drawn when their
 option is on; being separate streams, switching one on changes no other
 number. Blocks for many ticks are drawn at once (``chunk``), which gives the
 same numbers as drawing tick by tick. A normalised direction is
@@ -69,6 +73,7 @@ class Stream(IntEnum):
     RADIO = 3
     CAMERA = 4
     WALK = 5
+    SIGHT = 6
 
 
 def check_seed(seed: object) -> int:
@@ -118,7 +123,9 @@ class TickInputs:
     says who breaks down; ``heard`` (R, N, C) who receives whose advertisement
     (``None``: everyone hears everything in range); ``noise`` (R, N, C, 2) is
     the detection error in metres (``None``: exact); ``turn`` (R, N, 2) is
-    each robot's walk turn as ``(cos, sin)`` (``None``: the walk does not turn).
+    each robot's walk turn as ``(cos, sin)`` (``None``: the walk does not turn);
+    ``sight`` (R, N, C) how far each robot sees each carrier this tick
+    (``None``: ``camera_range``, a hard disc).
     """
 
     walk: Float
@@ -127,6 +134,7 @@ class TickInputs:
     heard: NDArray[np.bool_] | None = None
     noise: Float | None = None
     turn: Float | None = None
+    sight: Float | None = None
     writes: tuple[Reprioritisation, ...] = ()
 
     @classmethod
@@ -186,6 +194,8 @@ class RandomSource:
             self._purposes[Stream.CAMERA] = (n, c, 2)
         if params.walk_turn_ticks > 0:
             self._purposes[Stream.WALK] = (n,)
+        if params.camera_fade > 0:
+            self._purposes[Stream.SIGHT] = (n, c)
         if chunk is None:
             largest = max(int(np.prod(shape)) for shape in self._purposes.values())
             chunk = max(1, min(_MAX_CHUNK, _BLOCK_BYTES // (8 * largest)))
@@ -203,7 +213,7 @@ class RandomSource:
 
     def _draw(self, ticks: int) -> None:
         for purpose, shape in self._purposes.items():
-            uniform = purpose in (Stream.BREAKDOWN, Stream.RADIO, Stream.WALK)
+            uniform = purpose in (Stream.BREAKDOWN, Stream.RADIO, Stream.WALK, Stream.SIGHT)
             blocks = [
                 g.random((ticks, *shape)) if uniform else g.standard_normal((ticks, *shape))
                 for g in self._generators[purpose]
@@ -223,7 +233,7 @@ class RandomSource:
             self._first, row = tick, 0
         motion = self._blocks[Stream.MOTION][row]
         params = self._params
-        heard = noise = turn = None
+        heard = noise = turn = sight = None
         breakdown = np.zeros(motion.shape[:2], dtype=bool)
         if Stream.BREAKDOWN in self._blocks:
             breakdown = self._blocks[Stream.BREAKDOWN][row] < params.breakdown
@@ -233,6 +243,8 @@ class RandomSource:
             noise = self._blocks[Stream.CAMERA][row] * params.detection_noise
         if Stream.WALK in self._blocks:
             turn = walk_turns(self._blocks[Stream.WALK][row], params)
+        if Stream.SIGHT in self._blocks:
+            sight = params.camera_far - self._blocks[Stream.SIGHT][row] * params.camera_fade
         return TickInputs(
             walk=unit_vectors(motion[..., 0:2]),
             sidestep=unit_vectors(motion[..., 2:4]),
@@ -240,5 +252,6 @@ class RandomSource:
             heard=heard,
             noise=noise,
             turn=turn,
+            sight=sight,
             writes=due_writes(params, tick),
         )

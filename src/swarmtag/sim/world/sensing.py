@@ -9,7 +9,8 @@ the last status and urgency it heard per tag (its BLE cache). Two models:
   tick (once per advertising interval, at the tag's own phase, on a grid of
   whole microseconds) and the advertisement is not lost. The camera sees
   carrier c when it is in the arena and not carried, within
-  ``camera.range`` (centre to centre), and, with occlusion, the segment
+  ``camera.range`` (centre to centre; with a camera fade, within this
+  tick's draw of the detection ramp), and, with occlusion, the segment
   between the centres crosses no other such carrier's footprint (nor, with
   ``carriers+robots``, passes within a radius of another robot's centre).
   A sighting records the tick and the position seen (true position plus
@@ -200,7 +201,8 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     if params.split:
         heard = present & (distance <= params.radio_range)
         heard &= advertising(state.advert_phase, t, params)[:, None, :]
-        visible = present & (state.carried_by < 0)[:, None, :] & (distance <= params.camera_range)
+        reach = params.camera_range if inputs.sight is None else inputs.sight
+        visible = present & (state.carried_by < 0)[:, None, :] & (distance <= reach)
     else:
         heard = visible = present & (distance <= params.detection_radius)
     if inputs.heard is not None:
