@@ -221,14 +221,19 @@ def test_code_version_changes_with_the_model_source(monkeypatch, tmp_path):
     scenario_hash, model_hash = rest.split(".")
     assert len(scenario_hash) == len(model_hash) == 12
     assert model_hash == spec.model_digest()
-    # A copy of the package with one kernel byte changed gets another digest.
+    # A copy of the package: a byte changed in the model changes the digest, in a picture not.
+    import swarmtag._sources as sources
+
     root = tmp_path / "swarmtag"
     shutil.copytree(Path(spec.__file__).resolve().parents[1], root)
-    kernel = root / "sim" / "model" / "step.py"
-    kernel.write_bytes(kernel.read_bytes() + b"\n# changed\n")
-    monkeypatch.setattr(spec, "__file__", str(root / "experiments" / "spec.py"))
-    spec.model_digest.cache_clear()
+    monkeypatch.setattr(sources, "PACKAGE_ROOT", root)
+    monkeypatch.setattr(spec, "PACKAGE_ROOT", root)
     try:
-        assert spec.model_digest() != model_hash
+        for changed, same in (("sim/outputs/render.py", True), ("sim/model/step.py", False)):
+            source = root / changed
+            source.write_bytes(source.read_bytes() + b"\n# changed\n")
+            spec.model_digest.cache_clear()
+            assert (spec.model_digest() == model_hash) is same, changed
+        assert all(root in path.parents for path in spec.model_sources())
     finally:
         spec.model_digest.cache_clear()

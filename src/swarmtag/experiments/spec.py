@@ -49,6 +49,7 @@ from typing import Any, Final
 
 from swarmtag import __version__
 from swarmtag._checks import MAX_RESAMPLES, MAX_RUN_INDEX, MAX_SEED, check_int
+from swarmtag._sources import PACKAGE_ROOT, imported_sources
 from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError, PolicyError, StudyError
 from swarmtag.policy import Policy, parse_policy
@@ -117,19 +118,28 @@ def _table(value: object, key: str) -> dict[str, Any]:
     return dict(value)
 
 
-_MODEL_PACKAGES: Final = ("sim", "policy", "tag", "io")
-"""Sub-packages whose source decides a simulated run's rows."""
+_MODEL_ENTRY: Final = ("sim", "simulation.py")
+"""The module a simulated run goes through: the model is every source it imports."""
+
+
+def model_sources() -> list[Path]:
+    """The source files that decide a simulated run's rows: ``simulate`` and all it imports.
+
+    Read statically (``swarmtag._sources``), lazy imports (the compiled
+    backend) included; pictures and MCAP output (``sim/outputs/render.py``,
+    ``mcap.py``) and the CLI are not imported by ``simulate``, so a change
+    there leaves stored runs valid.
+    """
+    return imported_sources([PACKAGE_ROOT.joinpath(*_MODEL_ENTRY)], transitive=True)
 
 
 @functools.cache
 def model_digest() -> str:
     """First 12 hex digits of a SHA-256 over the model's source files (paths and bytes)."""
-    root = Path(__file__).resolve().parents[1]
     digest = hashlib.sha256()
-    for package in _MODEL_PACKAGES:
-        for path in sorted((root / package).rglob("*.py")):
-            digest.update(path.relative_to(root).as_posix().encode() + b"\0")
-            digest.update(path.read_bytes() + b"\0")
+    for path in model_sources():
+        digest.update(path.relative_to(PACKAGE_ROOT).as_posix().encode() + b"\0")
+        digest.update(path.read_bytes() + b"\0")
     return digest.hexdigest()[:12]
 
 

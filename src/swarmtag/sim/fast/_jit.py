@@ -37,7 +37,6 @@ and 51 s after):
 
 from __future__ import annotations
 
-import ast
 import contextlib
 import hashlib
 import os
@@ -48,6 +47,8 @@ from typing import Any, Final, TypeVar
 import numba
 from numba.core import sigutils, types
 from numba.core.registry import CPUDispatcher
+
+from swarmtag._sources import imported_sources
 
 __all__ = ["counted", "discard_stale_machine_code", "entry", "inlined", "jit"]
 
@@ -155,19 +156,9 @@ def _kernel_sources() -> list[Path]:
     into the machine code): an edit there must discard the machine code too.
     """
     here = Path(__file__).parent
-    package_root = here.parents[1]
-    sources = set(here.glob("*.py"))
-    for path in list(sources):
-        for node in ast.walk(ast.parse(path.read_bytes())):
-            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                parts = node.module.split(".")
-                if parts[0] != "swarmtag" or parts[:3] == ["swarmtag", "sim", "fast"]:
-                    continue
-                base = package_root.joinpath(*parts[1:])
-                module = base.with_suffix(".py")
-                sources.add(module if module.is_file() else base / "__init__.py")
-    sources.update(path for path in here.iterdir() if path.suffix in _DATA_SUFFIXES)
-    return sorted(sources)
+    sources = imported_sources(here.glob("*.py"), transitive=False)
+    data = (path for path in here.iterdir() if path.suffix in _DATA_SUFFIXES)
+    return sorted({*sources, *data})
 
 
 def _sources_digest() -> str:
