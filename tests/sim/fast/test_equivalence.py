@@ -89,6 +89,9 @@ CASES = {
         PAPER, timing=Timing(dock=0.0, lift=0.0, release=0.0, pursuit_timeout=2.0, cooldown=1.0)
     ),
     "crowded-20x40": replace(Scenario.default(20, 40), ticks=400),
+    "grid-placed-20x40": replace(
+        Scenario.default(20, 40), ticks=400, arena=None, arena_scaling=0.3
+    ),
     "warehouse": warehouse(8, 1500, order_interval=12.0, initial_orders=6),
 }
 HALL = replace(

@@ -9,6 +9,7 @@ from swarmtag.errors import ConfigError
 from swarmtag.policy import Proximity, Urgency
 from swarmtag.sim import Arena, Realism, Scenario, Scene, make_params, sample_scene
 from swarmtag.sim.model.geometry import length
+from swarmtag.sim.model.scene import grid_place
 
 
 @pytest.mark.parametrize(("robots", "carriers"), [(3, 7), (10, 20), (20, 40)])
@@ -54,12 +55,22 @@ def test_speed_variation_changes_only_the_speed_factors():
     assert ((varied.speed_factor >= 0.5) & (varied.speed_factor <= 1.5)).all()
 
 
-def test_a_crowded_pick_up_area_is_refused_with_advice():
+def test_a_pick_up_area_too_crowded_for_random_placement_gets_the_densest_grid():
     # 3 carriers fit in a column only with (almost) no slack: random placement cannot
-    # find it and is refused, not looped forever
+    # find it, so they stand on the grid's three cells, in an order drawn from the stream
     crowded = Scenario(carriers=3, arena=Arena(pickup_width=1.0, carrier_spacing=1.3424))
-    with pytest.raises(ConfigError, match="carriers: could not place them without overlap"):
-        sample_scene(make_params(crowded, Proximity()), seed=0, run=0)
+    scene = sample_scene(make_params(crowded, Proximity()), seed=0, run=0)
+    half, pitch = 0.1775, 0.355 + 1.3424
+    assert sorted(scene.carrier_pos.tolist()) == [[half, half + k * pitch] for k in range(3)]
+    again = sample_scene(make_params(crowded, Proximity()), seed=0, run=0)
+    assert np.array_equal(scene.carrier_pos, again.carrier_pos)
+    other = [sample_scene(make_params(crowded, Proximity()), seed=s, run=0) for s in range(1, 6)]
+    assert any(not np.array_equal(o.carrier_pos, scene.carrier_pos) for o in other)
+
+
+def test_the_grid_refuses_more_bodies_than_cells():
+    with pytest.raises(ConfigError, match="5 bodies do not fit on a 2 x 2 grid"):
+        grid_place(np.random.default_rng(0), 5, low=np.zeros(2), high=np.ones(2), pitch=1.0)
 
 
 def test_hand_built_scene_defaults():

@@ -19,7 +19,7 @@ from swarmtag.sim.fast._jit import counted, jit
 from swarmtag.sim.fast._pcg import standard_normal, states_of, uniform
 from swarmtag.sim.model.params import Params
 from swarmtag.sim.model.randomness import Stream, stream, unit_vectors
-from swarmtag.sim.model.scene import PLACE_ATTEMPTS, PLACE_RESTARTS, crowded
+from swarmtag.sim.model.scene import PLACE_ATTEMPTS, PLACE_RESTARTS, sample_scene
 from swarmtag.sim.model.state import Scene
 from swarmtag.sim.world.urgency import initial_urgency
 from swarmtag.tag import TagStatus
@@ -27,9 +27,9 @@ from swarmtag.tag import TagStatus
 __all__ = ["TOO_CROWDED_CARRIERS", "TOO_CROWDED_ROBOTS", "sample_scenes", "seeded_scenes"]
 
 TOO_CROWDED_CARRIERS = 1
-"""``sample_scenes`` failure: the carriers could not be placed."""
+"""``sample_scenes`` failure: the carriers could not be placed at random (the grid takes over)."""
 TOO_CROWDED_ROBOTS = 2
-"""``sample_scenes`` failure: the robots could not be placed."""
+"""``sample_scenes`` failure: the robots could not be placed at random (the grid takes over)."""
 
 
 @jit
@@ -244,12 +244,12 @@ def seeded_scenes(params: Params, *, seed: int, run_ids: Sequence[int]) -> list[
         phase_draw,
         failure,
     )
-    if failure.any():
-        first = int(failure[np.flatnonzero(failure)[0]])
-        raise crowded("carriers" if first == TOO_CROWDED_CARRIERS else "robots")
     scenes = []
     awaiting = np.full(carriers, TagStatus.AWAITING_PICKUP, dtype=np.int8)
     for r in range(runs):
+        if failure[r]:  # too crowded for random placement: the reference's grid, same draws
+            scenes.append(sample_scene(params, seed=seed, run=int(run_ids[r])))
+            continue
         urgency = initial_urgency(
             urgency_draw[r],
             growing=params.growing,

@@ -9,11 +9,16 @@ scene in every condition:
    wholly inside it); it is kept when its Chebyshev distance to every carrier
    already placed is at least ``carrier_size + carrier_spacing``. After
    1000 rejected candidates for one carrier the placement starts over;
-   after 100 restarts the scenario is refused as too crowded;
+   after 100 restarts (a pick-up area too crowded for random placement,
+   which jams at about half of the densest packing) the carriers stand on
+   the densest grid instead: ``rng.permutation`` of its cells (row by row,
+   spacing ``carrier_size + carrier_spacing`` from the area's corner), the
+   first ``C`` of them in marker order (``Scenario`` has refused scenarios
+   whose grid holds fewer);
 2. one ``rng.random(C)`` for the urgencies (``swarmtag.sim.world.urgency``);
 3. robots, in id order, by rejection within the drop-off area: kept when
    ``sqrt(dx*dx + dy*dy)`` to every robot already placed is at least one
-   diameter (same limits);
+   diameter (same limits, the same grid after them, spacing one diameter);
 4. ``rng.standard_normal((N, 2))``, normalised: initial headings (and
    random-walk directions);
 5. ``rng.standard_normal(N)``: speed factors ``clip(1 + v * z, 0.5, 1.5)``
@@ -42,7 +47,7 @@ from swarmtag.sim.world.orders import sample_warehouse_scene
 from swarmtag.sim.world.urgency import initial_urgency
 from swarmtag.tag import TagStatus
 
-__all__ = ["crowded", "sample_scene"]
+__all__ = ["grid_place", "sample_scene"]
 
 PLACE_ATTEMPTS: Final = 1000
 PLACE_RESTARTS: Final = 100
@@ -55,9 +60,9 @@ def _place(
     low: Float,
     high: Float,
     far_enough: Callable[[Float, Float], bool],
-    what: str,
+    pitch: float,
 ) -> Float:
-    """``count`` points placed one after another by rejection (see the module docs)."""
+    """``count`` points placed one after another by rejection, else on the grid (module docs)."""
     span = high - low
     for _ in range(PLACE_RESTARTS):
         placed = np.empty((count, 2))
@@ -71,16 +76,30 @@ def _place(
                 break
         else:
             return placed
-    raise crowded(what)
+    return grid_place(rng, count, low=low, high=high, pitch=pitch)
 
 
-def crowded(what: str) -> ConfigError:
-    """The error for bodies (``what``) that rejection sampling could not place."""
-    msg = (
-        f"{what}: could not place them without overlap after {PLACE_RESTARTS} tries; "
-        "the area is too crowded (widen it or place fewer)"
-    )
-    return ConfigError(msg)
+def grid_place(
+    rng: np.random.Generator, count: int, *, low: Float, high: Float, pitch: float
+) -> Float:
+    """``count`` cells of the grid of ``pitch`` from ``low`` within ``high``, chosen at random.
+
+    The cells are numbered row by row (x fastest); ``rng.permutation`` of
+    their numbers picks them, the first ``count`` in order. ``ConfigError``
+    when the grid has fewer cells (``Scenario`` refuses such scenarios first).
+
+    >>> cells = grid_place(np.random.default_rng(0), 3, low=np.zeros(2), high=np.ones(2),
+    ...                    pitch=0.5)
+    >>> sorted(map(tuple, cells.tolist()))
+    [(0.5, 0.5), (1.0, 0.0), (1.0, 0.5)]
+    """
+    columns, rows = (np.floor((high - low) / pitch).astype(np.int64) + 1).tolist()
+    if columns * rows < count:
+        msg = f"{count} bodies do not fit on a {columns} x {rows} grid of pitch {pitch!r} m"
+        raise ConfigError(msg)
+    chosen = rng.permutation(columns * rows)[:count]
+    cells: Float = low + np.stack((chosen % columns, chosen // columns), axis=-1) * pitch
+    return cells
 
 
 def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
@@ -100,7 +119,7 @@ def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
         low=np.array([half, half]),
         high=np.array([params.pickup_right - half, arena - half]),
         far_enough=carriers_apart,
-        what="carriers",
+        pitch=pitch,
     )
     urgency = initial_urgency(
         rng.random(params.carriers),
@@ -118,7 +137,7 @@ def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
         low=np.array([params.dropoff_left + radius, radius]),
         high=np.array([arena - radius, arena - radius]),
         far_enough=robots_apart,
-        what="robots",
+        pitch=2 * radius,
     )
     heading = unit_vectors(rng.standard_normal((params.robots, 2)))
     factor = np.clip(1.0 + params.speed_variation * rng.standard_normal(params.robots), 0.5, 1.5)
