@@ -54,6 +54,7 @@ PUBLIC = {
     "BuiltinController",
     # backends
     "Backend",
+    "Batch",
     "REFERENCE",
     "FAST",
     # checks users run

@@ -8,7 +8,7 @@ import pytest
 
 from swarmtag.errors import ConfigError
 from swarmtag.policy import Proximity, Urgency
-from swarmtag.sim import BUILTIN, Scenario, check_controller, simulate
+from swarmtag.sim import BUILTIN, REFERENCE, Scenario, check_controller, simulate
 from swarmtag.sim.builtin.controller import BuiltinController
 from swarmtag.sim.controllers import controller_names, is_controller, named_controller
 from swarmtag.sim.determinism import run_csv
@@ -98,3 +98,35 @@ def test_the_behaviour_tree_is_found_by_name_through_its_entry_point():
     made = named_controller("bt")()
     assert type(made).__module__ == "swarmtag.robot.sil"
     assert named_controller("builtin")() is BUILTIN
+
+
+class LoggingBackend:
+    """A user's backend object: the reference backend, with every batch it is asked for kept."""
+
+    name = "logging"
+
+    def __init__(self) -> None:
+        self.batches = []
+
+    def unavailable(self):
+        return None
+
+    def runs(self, controller):
+        return REFERENCE.runs(controller)
+
+    def memory(self, scenario, runs, *, record):
+        return REFERENCE.memory(scenario, runs, record=record)
+
+    def run(self, batch):
+        self.batches.append(batch)
+        return REFERENCE.run(batch)
+
+
+def test_a_backend_object_of_ones_own_runs_through_simulate():
+    mine = LoggingBackend()
+    result = simulate(SCENARIO, Proximity(), seed=2, runs=3, run_offset=4, backend=mine)
+    (batch,) = mine.batches
+    assert (batch.seed, batch.runs, batch.run_offset, batch.controller) == (2, 3, 4, BUILTIN)
+    assert _csv(result) == _csv(
+        simulate(SCENARIO, Proximity(), seed=2, runs=3, run_offset=4, backend="fast")
+    )

@@ -23,7 +23,8 @@ What this package exports:
   vectorised built-in one (``BUILTIN``, a ``BuiltinController``); per-robot
   controllers such as ``swarmtag.robot``'s tree see one robot through
   ``swarmtag.robot.SimRobotIO``;
-- backends: ``Backend``, the protocol ``simulate(..., backend=)`` takes, and
+- backends: ``Backend``, the protocol ``simulate(..., backend=)`` takes (its
+  ``run`` computes a ``Batch``), and
   the shipped ``REFERENCE`` (numpy) and ``FAST`` (numba) ones;
 - checks anyone can run on their own scenarios and controllers:
   ``check_determinism``, ``check_common_scenes``, ``check_controller`` (its
@@ -48,7 +49,7 @@ See docs/simulator.md for the model, the defaults and the random-stream layout.
 
 from __future__ import annotations
 
-from swarmtag.sim.backends import FAST, REFERENCE, Backend
+from swarmtag.sim.backends import FAST, REFERENCE, Backend, Batch
 from swarmtag.sim.builtin.controller import BUILTIN, BuiltinController
 from swarmtag.sim.config.parts import (
     Arena,
@@ -86,6 +87,7 @@ __all__ = [
     "Arena",
     "Arrivals",
     "Backend",
+    "Batch",
     "Bodies",
     "BuiltinController",
     "Camera",

@@ -5,13 +5,14 @@ run). ``simulate(..., backend=)`` takes a ``Backend`` object or its name;
 ``None`` picks ``FAST`` where numba is installed and the controller is the
 built-in one, else ``REFERENCE``. A backend of one's own implements the
 ``Backend`` protocol (a name, whether it runs here, which controllers it
-runs, its memory estimate and ``run``).
+runs, its memory estimate and ``run``, which computes a ``Batch``).
 """
 
 from __future__ import annotations
 
 import importlib.util
 from collections.abc import Mapping
+from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Final, Protocol, runtime_checkable
 
@@ -31,6 +32,7 @@ __all__ = [
     "MAX_THREADS",
     "REFERENCE",
     "Backend",
+    "Batch",
     "FastBackend",
     "ReferenceBackend",
     "fast_available",
@@ -39,6 +41,23 @@ __all__ = [
 
 MAX_THREADS: Final = 1024
 """Most threads the compiled backend is asked to use."""
+
+
+@dataclass(frozen=True, eq=False)
+class Batch:
+    """What ``simulate`` asks a backend for: runs ``run_offset ..`` of master ``seed``."""
+
+    params: Params
+    controller: Controller
+    seed: int
+    runs: int
+    run_offset: int = 0
+    record: bool = False
+    """Keep per-tick trajectories."""
+    check: bool = False
+    """Verify the world invariants every tick."""
+    threads: int | None = None
+    """Threads over runs (the compiled backend's; None: its default)."""
 
 
 @runtime_checkable
@@ -60,19 +79,8 @@ class Backend(Protocol):
         """Estimated peak bytes of one batch of ``runs`` runs of ``scenario``."""
         ...
 
-    def run(
-        self,
-        params: Params,
-        *,
-        controller: Controller,
-        seed: int,
-        runs: int,
-        run_offset: int,
-        record: bool,
-        check: bool,
-        threads: int | None,
-    ) -> SimResult:
-        """Runs ``run_offset ..`` of master ``seed``: the seeded start, every tick, the logs."""
+    def run(self, batch: Batch) -> SimResult:
+        """The batch's runs: the seeded start, every tick, the logs."""
         ...
 
 
@@ -99,24 +107,17 @@ class ReferenceBackend(_Shipped):
         """Every controller."""
         return True
 
-    def run(
-        self,
-        params: Params,
-        *,
-        controller: Controller,
-        seed: int,
-        runs: int,
-        run_offset: int,
-        record: bool,
-        check: bool,
-        threads: int | None,
-    ) -> SimResult:
+    def run(self, batch: Batch) -> SimResult:
         """Seeded start, ``run_batch`` (``threads`` is the compiled backend's; unused here)."""
-        state = seeded_state(params, seed=seed, runs=runs, run_offset=run_offset, backend=self.name)
+        params, seed = batch.params, batch.seed
+        state = seeded_state(
+            params, seed=seed, runs=batch.runs, run_offset=batch.run_offset, backend=self.name
+        )
         source = RandomSource(params, seed=seed, run_ids=state.run_ids)
         return run_batch(
-            state, params, source, seed=seed, record=record, check=check, controller=controller
-        )
+            state, params, source, seed=seed, record=batch.record, check=batch.check,
+            controller=batch.controller,
+        )  # fmt: skip
 
 
 class FastBackend(_Shipped):
@@ -134,18 +135,7 @@ class FastBackend(_Shipped):
         """The built-in controller only (compiled with the world)."""
         return controller is BUILTIN
 
-    def run(
-        self,
-        params: Params,
-        *,
-        controller: Controller,
-        seed: int,
-        runs: int,
-        run_offset: int,
-        record: bool,
-        check: bool,
-        threads: int | None,
-    ) -> SimResult:
+    def run(self, batch: Batch) -> SimResult:
         """The batch on the compiled kernel, ``threads`` threads over runs.
 
         A batch whose sparse tag caches overflow (``sim/fast/_tag_cache.py``)
@@ -154,14 +144,16 @@ class FastBackend(_Shipped):
         """
         from swarmtag.sim.fast import TagCacheFull, simulate_fast  # noqa: PLC0415 - numba extra
 
+        params, seed, runs, record = batch.params, batch.seed, batch.runs, batch.record
         capacity = None
         while True:
             state = seeded_state(
-                params, seed=seed, runs=runs, run_offset=run_offset, backend=self.name
+                params, seed=seed, runs=runs, run_offset=batch.run_offset, backend=self.name
             )
             try:
                 final, events, breakdowns, recorder = simulate_fast(
-                    state, params, seed=seed, record=record, check=check, threads=threads,
+                    state, params, seed=seed, record=record, check=batch.check,
+                    threads=batch.threads,
                     adopt=True, cache_capacity=capacity,
                 )  # fmt: skip
             except TagCacheFull as full:

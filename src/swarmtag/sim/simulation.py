@@ -6,7 +6,7 @@ from swarmtag._checks import MAX_RUN_INDEX, check_int
 from swarmtag._resources import check_memory
 from swarmtag.errors import ConfigError
 from swarmtag.policy import Policy
-from swarmtag.sim.backends import MAX_THREADS, Backend, resolve_backend
+from swarmtag.sim.backends import MAX_THREADS, Backend, Batch, resolve_backend
 from swarmtag.sim.builtin.controller import BUILTIN
 from swarmtag.sim.config.scenario import Scenario
 from swarmtag.sim.control.interface import Controller
@@ -99,9 +99,9 @@ def simulate(
             error=ConfigError,
         )
         params = make_params(scenario, policy)
-        return chosen.run(
-            params, controller=running, seed=seed, runs=runs, run_offset=run_offset,
-            record=record, check=check, threads=threads,
-        )  # fmt: skip
+        batch = Batch(
+            params, running, seed, runs, run_offset, record=record, check=check, threads=threads
+        )
+        return chosen.run(batch)
     finally:
         _close(running, owned)
