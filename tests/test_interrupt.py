@@ -221,3 +221,21 @@ def test_an_interrupt_inside_llvmlite_s_bookkeeping_is_raised_after_it():
     # finalizer freed it again at exit: a segfault after "aborted". The watchdog re-sends.
     done = _run_script(_BOOKKEEPING_SCRIPT)
     assert done.stdout.split() == ["detached", "returned", "raised"], done.stdout + done.stderr
+
+
+@pytest.mark.parametrize("interrupted", [True, False], ids=["after-ctrl-c", "no-ctrl-c"])
+def test_an_import_broken_by_a_ctrl_c_ends_as_aborted(monkeypatch, capsys, interrupted):
+    # A Ctrl-C inside numpy's C import, or while a fresh checkout's source is compiled,
+    # reaches the CLI as an ImportError or SyntaxError rather than a KeyboardInterrupt.
+    from swarmtag.cli import main
+
+    monkeypatch.setitem(sys.modules, "swarmtag.cli._main", None)  # its import fails
+    monkeypatch.setattr(_interrupt, "interrupted", lambda: interrupted)
+    if interrupted:
+        with pytest.raises(SystemExit) as ended:
+            main(["--help"])
+        assert ended.value.code == 130
+        assert capsys.readouterr().err == "swarmtag: error: aborted\n"
+    else:
+        with pytest.raises(ImportError):
+            main(["--help"])
