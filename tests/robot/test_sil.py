@@ -79,6 +79,26 @@ def test_large_swarm_event_logs_are_identical(realism):
         ),
         scenario(3, 7, perception="disc", ticks=600),
         scenario(5, 10, "paper-sim", ticks=800, camera={"range": 1.5, "fade": 1.0}),
+        scenario(
+            3,
+            7,
+            "lab",
+            ticks=900,
+            urgency={"model": "static"},
+            camera={"range": 1.0},
+            radio={"search": True},
+            walk={"turn_interval": 1.0, "turn_angle": 40.0},
+            motion={"speed": 0.5},
+        ),
+        scenario(
+            5,
+            10,
+            "paper-sim",
+            ticks=800,
+            camera={"range": 0.8, "memory": 2.0},
+            radio={"search": True, "shadowing": 0.0, "range": 2.5},
+            realism={"advertisement_loss": 0.2},
+        ),
     ],
     ids=[
         "paper-sim",
@@ -88,6 +108,8 @@ def test_large_swarm_event_logs_are_identical(realism):
         "turns-writes",
         "disc",
         "camera-fade",
+        "ble-search",
+        "ble-search-exact-memory",
     ],
 )
 def test_perception_and_walk_variants_are_identical(world):

@@ -18,7 +18,13 @@ from py_trees.common import Access, Status
 
 from swarmtag.policy import select
 from swarmtag.robot.config import ControllerConfig
-from swarmtag.robot.io import ControlStep, Float, Report, RobotIO
+from swarmtag.robot.io import ControlStep, Detections, Float, Report, RobotIO
+from swarmtag.robot.search import (
+    candidate_distances,
+    give_up_seeking,
+    seek_tumbles,
+    start_seeking,
+)
 from swarmtag.sim.control.rules import STUCK_PROGRESS, away_from
 from swarmtag.sim.model.geometry import FACE_NORMALS, length
 from swarmtag.sim.world.predock import nearest_free_face, taken_faces
@@ -52,6 +58,8 @@ BLACKBOARD_KEYS = (
     "walk",
     "walk_clock",
     "blocked_until",
+    "seek",
+    "seek_ref",
 )
 """The robot's memory, one blackboard namespace per robot."""
 
@@ -141,6 +149,9 @@ def _steer(behaviour: RobotBehaviour) -> None:
     bumper = io.bumper()
     draws = io.random()
     fresh = bool(memory.redirect) or bool((bumper != 0).any())
+    seeking = config.radio_search and memory.seek >= 0
+    if seeking:
+        fresh = seek_tumbles(io, memory, config, fresh)
     if fresh:
         memory.walk = away_from(draws.walk, bumper)
         io.walk(memory.walk)
@@ -148,6 +159,8 @@ def _steer(behaviour: RobotBehaviour) -> None:
     if config.walk_turn_ticks > 0 and draws.turn is not None:
         if fresh:
             memory.walk_clock = 0
+            return
+        if seeking:  # a seeker keeps its heading between hearings
             return
         memory.walk_clock += 1
         if memory.walk_clock >= config.walk_turn_ticks:
@@ -166,36 +179,79 @@ class SelectCarrier(RobotBehaviour):
 
     A candidate is a carrier whose position the cameras know, last heard
     AWAITING_PICKUP, not cooling down and with a free face. SUCCESS with a
-    choice (approach starts), FAILURE without.
+    choice (approach starts), FAILURE without. With BLE-led search every tag
+    heard so is a candidate, and a chosen one not seen is sought first
+    (``swarmtag.robot.search``): FAILURE until a camera sees it.
     """
 
-    keys = ("target", "face", "pursuit_start", "blocked_until")
+    keys = (
+        "target",
+        "face",
+        "pursuit_start",
+        "blocked_until",
+        "seek",
+        "seek_ref",
+        "timer",
+        "redirect",
+    )
 
     def update(self) -> Status:
         """Choose at the sensed step only."""
-        io, config = self.io, self.config
+        io, config, memory = self.io, self.config, self.memory
         if io.step != ControlStep.SENSED:
             return Status.FAILURE
+        searching = config.radio_search
+        if searching and memory.seek >= 0 and not give_up_seeking(io, memory, config):
+            return self._confirm()
         tags, seen = io.tag_states(), io.detections()
         available = (
-            seen.known
-            & (tags.status == _AWAITING)
-            & (self.memory.blocked_until <= io.tick)
+            (tags.status == _AWAITING)
+            & (memory.blocked_until <= io.tick)
             & seen.free_faces.any(axis=-1)
         )
+        if not searching:
+            available &= seen.known
         if not available.any():
             return Status.FAILURE
         choice = int(
             select(
                 config.policy,
                 urgency=tags.urgency,
-                distance=seen.distance,
+                distance=candidate_distances(tags, seen) if searching else seen.distance,
                 marker=config.markers,
                 available=available,
             )
         )
         if choice < 0:
             return Status.FAILURE
+        io.report(Report.SELECT, choice, float(tags.urgency[choice]))
+        io.report(Report.CANDIDATES, choice, float(available.sum()))
+        memory.pursuit_start = io.tick
+        if not seen.known[choice]:  # BLE-led search: seek the tag first
+            start_seeking(memory, choice, tags)
+            return Status.FAILURE
+        self._approach(choice, seen)
+        return Status.SUCCESS
+
+    def _confirm(self) -> Status:
+        """A seeker approaches its carrier once a camera sees it (still a candidate)."""
+        io, memory = self.io, self.memory
+        sought = int(memory.seek)
+        tags, seen = io.tag_states(), io.detections()
+        if not (
+            seen.known[sought]
+            and tags.status[sought] == _AWAITING
+            and memory.blocked_until[sought] <= io.tick
+            and seen.free_faces[sought].any()
+        ):
+            return Status.FAILURE
+        memory.seek = -1
+        self._approach(sought, seen)
+        return Status.SUCCESS
+
+    def _approach(self, choice: int, seen: Detections) -> None:
+        """Start the approach of ``choice`` at its nearest free face (one not taken if any)."""
+        io, config = self.io, self.config
         position, centre = io.pose().position, seen.position[choice]
         free = seen.free_faces[choice]
         face = int(nearest_free_face(position, centre, free, config.predock_offset))
@@ -206,18 +262,14 @@ class SelectCarrier(RobotBehaviour):
                 )
             )
             face = open_face if open_face >= 0 else face
-        io.report(Report.SELECT, choice, float(tags.urgency[choice]))
-        io.report(Report.CANDIDATES, choice, float(available.sum()))
         io.approach(choice, face)
         self.memory.target, self.memory.face = choice, face
-        self.memory.pursuit_start = io.tick
-        return Status.SUCCESS
 
 
 class RandomWalk(RobotBehaviour):
     """Random walk: drive on a random heading until something is met, then take a new one."""
 
-    keys = ("redirect", "walk", "walk_clock")
+    keys = ("redirect", "walk", "walk_clock", "seek", "seek_ref")
 
     def sensed(self) -> Status:
         """Steer."""
@@ -228,12 +280,12 @@ class RandomWalk(RobotBehaviour):
 class ResumeWalk(RobotBehaviour):
     """Back to random walk (after a delivery, or giving a pursuit up): a fresh heading."""
 
-    keys = ("target", "face", "timer", "redirect", "walk", "walk_clock")
+    keys = ("target", "face", "timer", "redirect", "walk", "walk_clock", "seek", "seek_ref")
 
     def update(self) -> Status:
         """Walk again; the new heading is taken at the next sensed step (now, if this is one)."""
         self.io.walk()
-        self.memory.target = self.memory.face = -1
+        self.memory.target = self.memory.face = self.memory.seek = -1
         self.memory.timer = 0
         self.memory.redirect = True
         if self.io.step == ControlStep.SENSED:

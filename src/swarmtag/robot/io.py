@@ -82,12 +82,15 @@ class TagStates:
     """The latest state heard from each tag (the BLE cache), each shape (C,).
 
     ``status`` is -1 for a tag never heard; ``age`` is ticks since it was
-    last heard (-1 never).
+    last heard (-1 never). ``distance``: the robot's running estimate of
+    each tag's distance from its RSSI (NaN never heard), where the robot
+    ranges tags (BLE-led search); None where it does not.
     """
 
     status: NDArray[np.int8]
     urgency: NDArray[np.int8]
     age: NDArray[np.int64]
+    distance: Float | None = None
 
 
 @dataclass(frozen=True, eq=False)

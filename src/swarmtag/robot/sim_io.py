@@ -129,13 +129,15 @@ class SimRobotIO:
         return push
 
     def tag_states(self) -> TagStates:
-        """The BLE cache after this tick's advertisements."""
+        """The BLE cache after this tick's advertisements (with BLE-led search, RSSI ranging)."""
         s, r, n = self.context.s, self.row, self._robot
         heard = s.heard_tick[r, n]
+        ranged = self.context.params.radio_search
         return TagStates(
             status=s.known_status[r, n],
             urgency=s.known_urgency[r, n],
             age=np.where(heard >= 0, self.context.t - heard, -1),
+            distance=np.where(heard >= 0, s.rssi[r, n], np.nan) if ranged else None,
         )
 
     def detections(self) -> Detections:

@@ -13,16 +13,21 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from swarmtag.policy import Urgency
 from swarmtag.sim import (
+    Camera,
     EventKind,
     Mode,
     Motion,
+    Radio,
+    Scenario,
     Scene,
     TickEvents,
     TickInputs,
     Timing,
     Walk,
     initial_state,
+    simulate,
 )
 from swarmtag.sim.builtin.decide import decide
 from swarmtag.sim.world.sensing import sense, sensed_state
@@ -271,3 +276,67 @@ def test_without_a_turn_interval_the_walk_is_not_turned():
     assert params.walk_turn_ticks == 0
     assert s.walk[0, :2].tolist() == [[0.6, 0.8], [0.6, 0.8]]
     assert s.walk_clock[0, :2].tolist() == [2, 1]
+
+
+def _searching(camera: float, search: bool) -> Scenario:
+    mapping = Scenario.default(3, 7, profile="lab").to_mapping()
+    mapping["camera"] |= {"range": camera, "occlusion": "carriers"}
+    mapping["radio"] = mapping.get("radio", {}) | {"search": search}
+    mapping["motion"] |= {"speed": 0.5}
+    mapping["urgency"] = {"model": "static"}
+    return Scenario.from_mapping(mapping)
+
+
+def test_ble_led_search_gives_robots_a_choice_with_a_short_camera():
+    shares = {}
+    for search in (False, True):
+        result = simulate(_searching(1.0, search), Urgency(alpha=0.7), seed=3, runs=8)
+        assert result.delivered.sum() >= 7 * 8 - 2  # seekers find their carriers
+        events = result.events
+        counts = events.value[events.kind == "candidates"]
+        shares[search] = float(np.mean(counts >= 2))
+    # switched off, a 1 m camera rarely shows two carriers; with search every heard tag counts
+    assert shares[False] < 0.35
+    assert shares[True] > 0.8
+
+
+def test_a_searching_robot_seeks_an_unseen_tag_then_approaches_when_it_sees_it():
+    params = params_for(
+        robots=1,
+        carriers=2,
+        perception="split",
+        camera=Camera(range=1.0),
+        radio=Radio(search=True, shadowing=0.0, interval=0.1),
+        timing=Timing(pursuit_timeout=2.0, cooldown=1.5),
+    )
+    # carrier 0 at 2.5 m (heard, not seen), carrier 1 at 2.9 m: proximity seeks carrier 0
+    before = _state(params, [(0.5, 2.0)], [(3.0, 2.0), (3.0, 0.5)])
+    s, events = _decide(before, params)
+    assert _kinds(events) == [EventKind.SELECT, EventKind.CANDIDATES]
+    assert _only(events, EventKind.CANDIDATES).value[0, 0] == 2.0
+    assert (s.mode[0, 0], s.target[0, 0], s.seek[0, 0]) == (Mode.WALK, -1, 0)
+    assert s.pursuit_start[0, 0] == T
+    assert s.seek_ref[0, 0] == pytest.approx(2.5)
+
+    # heard farther than the margin allows: a new heading (run and tumble)
+    farther = s.copy()
+    farther.robot_pos[0, 0] = (0.0, 2.0)
+    farther.walk[0, 0] = (-1.0, 0.0)
+    after, events = _decide(farther, params, TickInputs.fixed(1, 1, walk=(0.0, 1.0)), t=T + 1)
+    assert _kinds(events) == []
+    assert after.walk[0, 0].tolist() == [0.0, 1.0]
+    assert after.seek_ref[0, 0] == pytest.approx(2.625)  # smoothing 0.25: 2.5 + (3 - 2.5) / 4
+
+    # the camera sees it: the approach starts, no new selection, the pursuit's clock kept
+    near = s.copy()
+    near.robot_pos[0, 0] = (2.2, 2.0)
+    after, events = _decide(near, params, t=T + 1)
+    assert _kinds(events) == []
+    assert (after.mode[0, 0], after.target[0, 0], after.seek[0, 0]) == (Mode.PREDOCK, 0, -1)
+    assert after.pursuit_start[0, 0] == T
+
+    # a seeker times out like a pursuit and cools the tag down
+    late, events = _decide(s.copy(), params, t=T + 20)
+    assert _kinds(events) == [EventKind.TIMEOUT, EventKind.SELECT, EventKind.CANDIDATES]
+    assert late.blocked_until[0, 0, 0] == T + 20 + 15
+    assert late.seek[0, 0] == 1  # it chose again at once, among what is left

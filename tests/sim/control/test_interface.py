@@ -34,6 +34,7 @@ WORLD_ROBOT_FIELDS = (
     "heard_tick",
     "seen_tick",
     "seen_pos",
+    "rssi",
 )
 """Robot fields the world keeps: bodies, perception, the carrier a robot may overlap."""
 

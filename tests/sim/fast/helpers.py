@@ -17,6 +17,7 @@ TAG_CACHES = (
     "heard_tick",
     "seen_tick",
     "seen_pos",
+    "rssi",
 )
 """``WorldState``'s arrays per robot and carrier: empty where the fast backend keeps sparse caches."""
 

@@ -70,6 +70,22 @@ CASES = {
     "camera-fade": replace(PAPER, camera=Camera(range=1.5, fade=1.0, occlusion="carriers")),
     "camera-fade-memory": replace(PAPER, camera=Camera(range=1.2, fade=0.8, memory=3.0)),
     "slow-radio": replace(PAPER, radio=Radio(range=3.0, interval=0.7)),
+    "ble-search": replace(
+        PAPER, camera=Camera(range=1.0, occlusion="carriers"), radio=Radio(search=True)
+    ),
+    "ble-search-exact-memory-turns": replace(
+        PAPER,
+        camera=Camera(range=0.8, memory=2.0),
+        radio=Radio(search=True, shadowing=0.0, smoothing=1.0, range=2.5),
+        walk=Walk(turn_interval=0.4, turn_angle=75.0),
+    ),
+    "ble-search-realism": replace(
+        PAPER,
+        ticks=900,
+        camera=Camera(range=1.2, fade=0.6),
+        radio=Radio(search=True, shadowing=8.0, path_loss_exponent=2.7),
+        realism=Realism(advertisement_loss=0.3, status_delay=2, detection_noise=0.03),
+    ),
     "turning-walk": replace(PAPER, walk=Walk(turn_interval=0.4, turn_angle=75.0)),
     "reprioritised": replace(
         PAPER,

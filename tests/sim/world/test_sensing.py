@@ -228,3 +228,46 @@ def test_a_camera_fade_makes_camera_range_the_50_percent_detection_distance(fade
     near, middle, far = seen / ticks
     assert (near, far) == (expected[0], expected[2])
     assert middle == pytest.approx(expected[1], abs=0.08)
+
+
+def test_ble_ranging_draws_log_normal_distances_and_smooths_them():
+    from swarmtag.sim import RandomSource
+    from swarmtag.sim.world.sensing import sense, sensed_state
+
+    # one tag 2 m away, advertising every tick: the samples' log10 error has sd shadowing / (10 n)
+    values = {"radio.search": True, "radio.interval": 0.1, "radio.shadowing": 6.0}
+    values |= {"radio.path_loss_exponent": 2.5, "radio.smoothing": 1.0}
+    params = split_params(**values)
+    assert params.rssi_sigma == pytest.approx(6.0 / 25.0)
+    scene = Scene.build(robots=[(1.0, 2.0)], carriers=[(3.0, 2.0)])
+    state = initial_state(params, [scene], np.array([0]))
+    source = RandomSource(params, seed=5, run_ids=[0])
+    samples = []
+    for t in range(1, 2001):
+        senses = sense(state, source.inputs(t), params)
+        samples.append(senses.rssi[0, 0, 0])
+        state = sensed_state(state, senses)
+    error = np.log10(np.array(samples) / 2.0)
+    assert abs(error.mean()) < 0.02
+    assert error.std() == pytest.approx(0.24, rel=0.05)
+
+    # smoothing: the estimate moves a quarter of the way to each new sample
+    smooth = split_params(**(values | {"radio.smoothing": 0.25}))
+    state = initial_state(smooth, [scene], np.array([0]))
+    source = RandomSource(smooth, seed=5, run_ids=[0])
+    estimates = []
+    for t in range(1, 2001):
+        senses = sense(state, source.inputs(t), smooth)
+        estimates.append(senses.rssi[0, 0, 0])
+        state = sensed_state(state, senses)
+    assert estimates[0] == samples[0]  # the first hearing starts the estimate
+    assert estimates[1] == pytest.approx(samples[0] + 0.25 * (samples[1] - samples[0]))
+    assert np.log10(np.array(estimates[100:]) / 2.0).std() < 0.5 * error.std()
+
+
+def test_without_ble_search_nothing_is_ranged_or_drawn():
+    from swarmtag.sim import RandomSource
+
+    params = split_params(**{"radio.shadowing": 6.0})
+    assert not params.radio_search
+    assert RandomSource(params, seed=0, run_ids=[0]).inputs(1).rssi is None

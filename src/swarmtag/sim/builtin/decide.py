@@ -16,11 +16,19 @@ In this order, for every robot at once (broken robots are the world's,
    for it and with a free predock face; it will dock at the free face whose
    predock point is nearest to it (with ``avoid_taken_faces``: the nearest
    not taken, if there is one). Each selection also records how many
-   candidates there were (the ``candidates`` event);
+   candidates there were (the ``candidates`` event). With BLE-led search
+   (``radio_search``) every tag heard AWAITING_PICKUP (not cooling down,
+   with a free face) is a candidate, its ``d`` the camera's distance where
+   the position is known, else the robot's RSSI estimate; a chosen tag not
+   seen is *sought*: the robot walks on (``seek``) and approaches the
+   carrier once its camera sees it, the pursuit's checks and timeout
+   applying from the choice on (a seeker chooses nothing else);
 4. a walking robot that touched something last tick, or has just returned
    to walking, takes this tick's random direction, reversed if it points
-   into what it touched (negative dot product with the contact push); with
-   a turning walk, any other walking robot whose heading has been kept for
+   into what it touched (negative dot product with the contact push); so
+   does a seeker that heard its tag more than ``seek_margin`` farther than
+   the least on its current heading (run and tumble); with a turning walk,
+   any other walking robot (not seeking) whose heading has been kept for
    ``walk_turn_ticks`` rotates it by this tick's turn;
 5. a loaded robot stuck for ``stuck_ticks`` starts a sidestep of
    ``sidestep_ticks`` along this tick's sidestep direction (reversed alike).
@@ -49,16 +57,18 @@ _AWAITING = int(TagStatus.AWAITING_PICKUP)
 
 
 def _pursuit_checks(s: WorldState, params: Params, t: int, events: TickEvents) -> None:
-    pursuing = in_modes(s.mode, PURSUIT_MODES)
+    seeking = (s.mode == Mode.WALK) & (s.seek >= 0)
+    pursuing = in_modes(s.mode, PURSUIT_MODES) | seeking
     if not pursuing.any():
         return
-    heard = own(s.known_status, s.target)
+    target = np.where(seeking, s.seek, s.target)
+    heard = own(s.known_status, target)
     abandon = pursuing & (heard != _AWAITING)
     timeout = pursuing & ~abandon & (t - s.pursuit_start >= params.timeout_ticks)
-    events.add(EventKind.ABANDON, abandon, s.target, heard.astype(np.float64))
-    events.add(EventKind.TIMEOUT, timeout, s.target, np.full(timeout.shape, np.nan))
+    events.add(EventKind.ABANDON, abandon, target, heard.astype(np.float64))
+    events.add(EventKind.TIMEOUT, timeout, target, np.full(timeout.shape, np.nan))
     runs, robots = np.nonzero(timeout)
-    s.blocked_until[runs, robots, s.target[runs, robots]] = t + params.cooldown_ticks
+    s.blocked_until[runs, robots, target[runs, robots]] = t + params.cooldown_ticks
     to_walk(s, abandon | timeout)
 
 
@@ -124,32 +134,89 @@ def _selection(
 ) -> None:
     if not walkers.any():
         return
-    available = (
-        walkers[..., None]
-        & senses.known
-        & (s.known_status == _AWAITING)
+    open_tags = (
+        (s.known_status == _AWAITING)
         & (s.blocked_until <= t)
         & np.any(s.free_face, axis=-1)[:, None, :]
     )
+    distance = senses.distance
+    if params.radio_search:
+        walkers = walkers & ~_confirm(s, senses, walkers & (s.seek >= 0), open_tags, params)
+        walkers &= s.seek < 0
+        available = walkers[..., None] & open_tags  # every tag heard awaiting
+        distance = np.where(senses.known, senses.distance, s.rssi)
+    else:
+        available = walkers[..., None] & senses.known & open_tags
     if not available.any():
         return
     choice = select(
         params.policy,
         urgency=s.known_urgency,
-        distance=senses.distance,
+        distance=distance,
         marker=params.markers,
         available=available,
     ).astype(np.int64)
     chosen = choice >= 0
     rows, robots = grid(*choice.shape)
-    face = _face(s, choice, at_robots(s.free_face, choice), params, chosen)
     heard = s.known_urgency[rows, robots, np.maximum(choice, 0)].astype(np.float64)
     events.add(EventKind.SELECT, chosen, choice, heard)
     events.add(EventKind.CANDIDATES, chosen, choice, available.sum(axis=-1).astype(np.float64))
-    s.mode[chosen] = Mode.PREDOCK
-    s.target[chosen] = choice[chosen]
-    s.face[chosen] = face[chosen]
     s.pursuit_start[chosen] = t
+    if params.radio_search:  # a tag not seen yet is sought by its signal
+        seek = chosen & ~own(senses.known, choice)
+        s.seek[seek] = choice[seek]
+        s.seek_ref[seek] = own(s.rssi, choice)[seek]
+        chosen &= ~seek
+    _approach(s, choice, chosen, params)
+
+
+def _approach(s: WorldState, carrier: Int, chosen: NDArray[np.bool_], params: Params) -> None:
+    """The robots ``chosen`` start the approach of their ``carrier`` (PREDOCK at a free face)."""
+    face = _face(s, carrier, at_robots(s.free_face, carrier), params, chosen)
+    s.mode[chosen] = Mode.PREDOCK
+    s.target[chosen] = carrier[chosen]
+    s.face[chosen] = face[chosen]
+
+
+def _confirm(
+    s: WorldState,
+    senses: Senses,
+    seekers: NDArray[np.bool_],
+    open_tags: NDArray[np.bool_],
+    params: Params,
+) -> NDArray[np.bool_]:
+    """Seekers whose camera now sees their tag's carrier approach it (BLE-led search).
+
+    The pursuit started when the tag was chosen (its timeout counts from
+    then). Returns the robots that did.
+    """
+    if not seekers.any():
+        return seekers
+    sought = np.maximum(s.seek, 0)
+    confirmed: NDArray[np.bool_] = seekers & own(senses.known, sought) & own(open_tags, sought)
+    _approach(s, sought, confirmed, params)
+    s.seek[confirmed] = -1
+    return confirmed
+
+
+def _seek_tumbles(
+    s: WorldState, walking: NDArray[np.bool_], fresh: NDArray[np.bool_], t: int, params: Params
+) -> NDArray[np.bool_]:
+    """``fresh`` plus the seekers that take a new heading as their tag's signal weakens.
+
+    Run and tumble: a seeker keeps its heading while its estimate of the
+    tag's distance stays within ``seek_margin`` of the least it heard on
+    this leg (``seek_ref``) and takes a new random one when a hearing
+    exceeds it; a new leg (any new heading) starts from the estimate then.
+    """
+    seeking = walking & (s.seek >= 0)
+    sought = np.maximum(s.seek, 0)
+    now = own(s.rssi, sought)
+    heard = seeking & (own(s.heard_tick, sought) == t)
+    tumble: NDArray[np.bool_] = fresh | (heard & (now > s.seek_ref * params.seek_margin))
+    np.copyto(s.seek_ref, np.minimum(s.seek_ref, now), where=heard)
+    np.copyto(s.seek_ref, now, where=seeking & tumble)
+    return tumble
 
 
 def _turn_walk(s: WorldState, walking: NDArray[np.bool_], turn: Float, every: int) -> None:
@@ -186,11 +253,15 @@ def decide(
     bumped = (s.contact != 0).any(axis=-1)
     walking = s.mode == Mode.WALK
     fresh = walking & (s.redirect | bumped)
+    turning = walking
+    if params.radio_search:
+        fresh = _seek_tumbles(s, walking, fresh, t, params)
+        turning = walking & (s.seek < 0)  # a seeker keeps its heading between hearings
     if fresh.any():
         np.copyto(s.walk, away_from(inputs.walk, s.contact), where=fresh[..., None])
         s.redirect[fresh] = False
     if params.walk_turn_ticks > 0 and inputs.turn is not None:
-        _turn_walk(s, walking & ~fresh, inputs.turn, params.walk_turn_ticks)
+        _turn_walk(s, turning & ~fresh, inputs.turn, params.walk_turn_ticks)
         s.walk_clock[fresh] = 0
 
     unstick = (s.mode == Mode.TRANSPORT) & (s.stuck >= params.stuck_ticks) & (s.sidestep == 0)

@@ -155,6 +155,9 @@ class Scenario:
                 msg = f"reprioritisations: {event!r} is not a Reprioritisation"
                 raise ConfigError(msg)
         object.__setattr__(self, "reprioritisations", events)
+        if self.radio.search and perception != "split":
+            msg = "radio.search: BLE-led search needs perception = 'split' (radio and camera apart)"
+            raise ConfigError(msg)
         if self.warehouse is not None:
             self._order_capacity()
         self._check_durations()
@@ -240,9 +243,14 @@ class Scenario:
         if self.perception == "disc":
             return f"disc perception, R = {self.detection_radius:g} m"
         camera, radio = self.camera, self.radio
+        search = (
+            f", BLE-led search (n = {radio.path_loss_exponent:g}, {radio.shadowing:g} dB)"
+            if radio.search
+            else ""
+        )
         return (
             f"camera {camera.range:g} m (occlusion {camera.occlusion}, memory {camera.memory:g} s),"
-            f" radio {radio.range:g} m every {radio.interval:g} s"
+            f" radio {radio.range:g} m every {radio.interval:g} s{search}"
         )
 
     @property

@@ -20,7 +20,7 @@ A controller acts through the robots' command registers of ``WorldState``
 requests it returns (tag writes, driving in under a carrier, centring);
 the built-in controller also keeps its own memory in the state's other
 robot fields (``timer``, ``pursuit_start``, ``redirect``, ``stuck``,
-``blocked_until``, ``walk_clock``). ``BUILTIN`` is the vectorised built-in
+``blocked_until``, ``walk_clock``, ``seek``, ``seek_ref``). ``BUILTIN`` is the vectorised built-in
 controller; ``swarmtag.robot`` has the behaviour tree, which gives
 identical event logs.
 """
@@ -59,6 +59,8 @@ MEMORY_FIELDS: Final = (
     "stuck",
     "blocked_until",
     "walk_clock",
+    "seek",
+    "seek_ref",
 )
 """Robot fields only the built-in controller reads and writes (its own memory)."""
 

@@ -47,6 +47,10 @@ class Constants(NamedTuple):
     """
     camera_far: float
     """Beyond this no carrier is seen: the camera range plus half its fade. [m]"""
+    rssi_sigma: float
+    """log10 of the RSSI distance's error factor, its standard deviation: shadowing / (10 n)."""
+    seek_margin: float
+    """A seeker tumbles when its tag's estimate exceeds the leg's least by this factor."""
     tick_us: int
     """The tick in whole microseconds: tags advertise on this grid. [us]"""
     walk_turn_ticks: int
@@ -87,6 +91,14 @@ class Constants(NamedTuple):
     """How far a tag's advertisement is heard. (``radio.range``)"""
     advert_us: int
     """The tags' advertising interval. (``radio.interval``) [us]"""
+    radio_search: bool
+    """BLE-led search: head for the best-scoring heard tag before the camera sees it.
+    (``radio.search``)
+    """
+    rssi_smoothing: float
+    """Weight of a new RSSI distance in a robot's running estimate (1: latest only).
+    (``radio.smoothing``)
+    """
     camera_range: float
     """Robot centre to carrier centre within which a marker is read. (``camera.range``)"""
     occlusion: int
@@ -182,6 +194,8 @@ PARAMETERS = (
     "split",
     "detection_radius",
     "camera_far",
+    "rssi_sigma",
+    "seek_margin",
     "tick_us",
     "walk_turn_ticks",
     "time_scale",
@@ -200,6 +214,8 @@ PARAMETERS = (
     "walk_turn_angle",
     "radio_range",
     "advert_us",
+    "radio_search",
+    "rssi_smoothing",
     "camera_range",
     "occlusion",
     "memory_ticks",

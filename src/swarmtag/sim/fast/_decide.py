@@ -45,6 +45,7 @@ def to_walk(r: int, n: int, w: World) -> None:
     w.face[r, n] = -1
     w.timer[r, n] = 0
     w.redirect[r, n] = True
+    w.seek[r, n] = -1
 
 
 @inlined
@@ -133,9 +134,10 @@ def _nearest_face(
 def _pursuit_check(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     """Abandon unless AWAITING_PICKUP was heard, else time out (``decide._pursuit_checks``)."""
     mode = w.mode[r, n]
-    if not Mode.PREDOCK <= mode <= Mode.CENTRE:
+    seeking = mode == Mode.WALK and w.seek[r, n] >= 0
+    if not (Mode.PREDOCK <= mode <= Mode.CENTRE or seeking):
         return
-    target = w.target[r, n]
+    target = w.seek[r, n] if seeking else w.target[r, n]
     heard = known_status(r, n, max(target, 0), w, k)
     if heard != TagStatus.AWAITING_PICKUP:
         emit(r, n, EventKind.ABANDON, target, float(heard), x)
@@ -162,69 +164,136 @@ def _switch_taken_face(r: int, n: int, w: World, k: Constants, x: Scratch) -> No
 
 
 @inlined
+def _open(r: int, n: int, c: int, t: int, w: World, k: Constants) -> bool:
+    """Carrier ``c`` heard AWAITING_PICKUP, not cooling down for robot ``n``, with a free face."""
+    return (
+        known_status(r, n, c, w, k) == TagStatus.AWAITING_PICKUP
+        and known_blocked_until(r, n, c, w, k) <= t
+        and (
+            w.free_face[r, c, 0]
+            or w.free_face[r, c, 1]
+            or w.free_face[r, c, 2]
+            or w.free_face[r, c, 3]
+        )
+    )
+
+
+@inlined
+def _approach(r: int, n: int, c: int, w: World, k: Constants, x: Scratch) -> None:
+    """Robot ``n`` starts the approach of carrier ``c`` at a free face (``decide._approach``)."""
+    face = _nearest_face(r, n, c, False, w, k, x)
+    if k.avoid_taken_faces:
+        open_face = _nearest_face(r, n, c, True, w, k, x)
+        if open_face >= 0:
+            face = open_face
+    w.mode[r, n] = Mode.PREDOCK
+    w.target[r, n] = c
+    w.face[r, n] = face
+
+
+@inlined
+def _seen_at(r: int, n: int, c: int, x: Scratch) -> int:
+    """Where carrier ``c`` is in robot ``n``'s known carriers of this tick (-1: not known)."""
+    for i in range(x.seen_count[r, n]):
+        if x.seen_list[r, n, i] == c:
+            return i
+    return -1
+
+
+@inlined
+def _better(
+    c: int, score: float, distance: float, best: int, best_score: float, best_distance: float
+) -> bool:
+    """The largest score, then the smaller distance, then the smaller marker (in any order)."""
+    return (
+        best < 0
+        or score > best_score
+        or (
+            score == best_score
+            and (distance < best_distance or (distance == best_distance and c < best))
+        )
+    )
+
+
+@inlined
 def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     """Choose among the candidates (``decide._selection`` with ``policy.select``'s tie rule).
 
     The candidates are the carriers the robot knows the position of this tick
     (``Scratch.seen_*``), heard AWAITING_PICKUP, not cooling down, with a free face.
+    With BLE-led search, every such tag heard (``d``: the RSSI estimate where
+    the camera does not know the carrier); a seeker only looks for its tag.
     """
+    if k.radio_search and w.seek[r, n] >= 0:
+        sought = w.seek[r, n]
+        if _seen_at(r, n, sought, x) >= 0 and _open(r, n, sought, t, w, k):
+            _approach(r, n, sought, w, k, x)
+            w.seek[r, n] = -1
+        return
     best = -1
     best_score = 0.0
     best_distance = 0.0
+    best_known = False
     count = 0
-    for i in range(x.seen_count[r, n]):
-        c = x.seen_list[r, n, i]
-        if not (
-            known_status(r, n, c, w, k) == TagStatus.AWAITING_PICKUP
-            and known_blocked_until(r, n, c, w, k) <= t
-            and (
-                w.free_face[r, c, 0]
-                or w.free_face[r, c, 1]
-                or w.free_face[r, c, 2]
-                or w.free_face[r, c, 3]
-            )
-        ):
-            continue
-        count += 1
-        distance = x.seen_distance[r, n, i]
-        urgency = float(known_urgency(r, n, c, w, k))
-        score = _score(k.policy_kind, k.policy_parameter, urgency, distance)
-        # the largest score, then the smaller distance, then the smaller marker, in any order
-        if (
-            best < 0
-            or score > best_score
-            or (
-                score == best_score
-                and (distance < best_distance or (distance == best_distance and c < best))
-            )
-        ):
-            best = c
-            best_score = score
-            best_distance = distance
+    if k.radio_search:
+        for c in range(k.carriers):
+            if not _open(r, n, c, t, w, k):
+                continue
+            count += 1
+            i = _seen_at(r, n, c, x)
+            distance = x.seen_distance[r, n, i] if i >= 0 else w.rssi[r, n, c]
+            urgency = float(known_urgency(r, n, c, w, k))
+            score = _score(k.policy_kind, k.policy_parameter, urgency, distance)
+            if _better(c, score, distance, best, best_score, best_distance):
+                best = c
+                best_score = score
+                best_distance = distance
+                best_known = i >= 0
+    else:
+        for i in range(x.seen_count[r, n]):
+            c = x.seen_list[r, n, i]
+            if not _open(r, n, c, t, w, k):
+                continue
+            count += 1
+            distance = x.seen_distance[r, n, i]
+            urgency = float(known_urgency(r, n, c, w, k))
+            score = _score(k.policy_kind, k.policy_parameter, urgency, distance)
+            if _better(c, score, distance, best, best_score, best_distance):
+                best = c
+                best_score = score
+                best_distance = distance
+                best_known = True
     if best < 0:
         return
-    face = _nearest_face(r, n, best, False, w, k, x)
-    if k.avoid_taken_faces:
-        open_face = _nearest_face(r, n, best, True, w, k, x)
-        if open_face >= 0:
-            face = open_face
     emit(r, n, EventKind.SELECT, best, float(known_urgency(r, n, best, w, k)), x)
     emit(r, n, EventKind.CANDIDATES, best, float(count), x)
-    w.mode[r, n] = Mode.PREDOCK
-    w.target[r, n] = best
-    w.face[r, n] = face
     w.pursuit_start[r, n] = t
+    if best_known:
+        _approach(r, n, best, w, k, x)
+    else:  # a tag not seen yet is sought by its signal
+        w.seek[r, n] = best
+        w.seek_ref[r, n] = w.rssi[r, n, best]
 
 
 @inlined
 def _directions(
-    r: int, n: int, turns: np.ndarray, row: int, w: World, k: Constants, x: Scratch
+    r: int, n: int, t: int, outside: np.ndarray, row: int, w: World, k: Constants, x: Scratch
 ) -> None:
     """Fresh walk directions, the correlated walk's turn, sidesteps (end of ``decide``)."""
     push_x = w.contact[r, n, 0]
     push_y = w.contact[r, n, 1]
     walking = w.mode[r, n] == Mode.WALK
     fresh = walking and (w.redirect[r, n] or push_x != 0 or push_y != 0)
+    seeking = k.radio_search and walking and w.seek[r, n] >= 0
+    if seeking:  # run and tumble (``decide._seek_tumbles``)
+        sought = w.seek[r, n]
+        now = w.rssi[r, n, sought]
+        if w.heard_tick[r, n, sought] == t:
+            if now > w.seek_ref[r, n] * k.seek_margin:
+                fresh = True
+            w.seek_ref[r, n] = min(w.seek_ref[r, n], now)
+        if fresh:
+            w.seek_ref[r, n] = now
     if fresh:
         wx, wy = unit_vector(x.walk_gaussians[r, n, 0], x.walk_gaussians[r, n, 1])
         wx, wy = away_from(wx, wy, push_x, push_y)
@@ -232,13 +301,13 @@ def _directions(
         w.walk[r, n, 1] = wy
         w.redirect[r, n] = False
     if k.walk_turn_ticks > 0:
-        if walking and not fresh:
+        if walking and not fresh and not seeking:
             w.walk_clock[r, n] += 1
             if w.walk_clock[r, n] >= k.walk_turn_ticks:
                 hx = w.walk[r, n, 0]
                 hy = w.walk[r, n, 1]
-                c = turns[r, row, n, 0]
-                s = turns[r, row, n, 1]
+                c = outside[r, row, n, 0]
+                s = outside[r, row, n, 1]
                 rx = hx * c - hy * s
                 ry = hx * s + hy * c
                 length = math.sqrt(rx * rx + ry * ry)
@@ -262,7 +331,7 @@ def decide_robots(
     t: int,
     lo: int,
     hi: int,
-    turns: np.ndarray,
+    outside: np.ndarray,
     row: int,
     w: World,
     k: Constants,
@@ -270,11 +339,11 @@ def decide_robots(
 ) -> None:
     """The ``decide`` step of tick ``t`` for robots ``lo .. hi - 1`` of run ``r``.
 
-    ``turns[r, row]`` (robots, 2) is this tick's walk turn of each robot as ``(cos, sin)``.
+    ``outside[r, row, n]`` holds robot ``n``'s walk turn ``(cos, sin)`` (``_tick.outside_row``).
     """
     for n in range(lo, hi):
         _pursuit_check(r, n, t, w, k, x)
         _switch_taken_face(r, n, w, k, x)
         if x.before_mode[r, n] == Mode.WALK and w.mode[r, n] == Mode.WALK:
             _select(r, n, t, w, k, x)
-        _directions(r, n, turns, row, w, k, x)
+        _directions(r, n, t, outside, row, w, k, x)

@@ -72,7 +72,10 @@ class World(NamedTuple):
     heard_tick: I8
     seen_tick: I8
     seen_pos: F8
+    rssi: F8
     walk_clock: I8
+    seek: I8
+    seek_ref: F8
     carrier_pos: F8
     status: S1
     urgency: S1

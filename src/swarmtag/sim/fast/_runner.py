@@ -2,9 +2,10 @@
 
 ``simulate_fast`` takes the same start state and master seed as the
 reference ``run_batch`` with a ``RandomSource`` and gives the same results:
-the kernel draws from each run's own streams, the walk turns are drawn here
-with ``randomness.walk_turns``, operator writes are applied between kernel
-calls with ``wms.operator_writes`` (the kernel stops every run at each tick
+the kernel draws from each run's own streams, the walk turns and RSSI
+factors are drawn here (``randomness.walk_turns``, ``rssi_factors``),
+operator writes are applied between kernel calls with
+``wms.operator_writes`` (the kernel stops every run at each tick
 that has writes), and events come out of the kernel's per-run buffers into
 the same ``EventRecorder``. Groups of runs go to a pool of threads (the
 kernel holds no GIL). Kernel calls are bounded in work, so Ctrl-C is seen
@@ -49,7 +50,15 @@ from swarmtag.sim.fast._tick import advance
 from swarmtag.sim.model.events import EventKind, EventRecorder, RobotEvents, TickEvents
 from swarmtag.sim.model.invariants import check_tick
 from swarmtag.sim.model.params import Params
-from swarmtag.sim.model.randomness import Stream, check_seed, due_writes, stream, walk_turns
+from swarmtag.sim.model.randomness import (
+    Stream,
+    check_seed,
+    due_writes,
+    rssi_factors,
+    rssi_on,
+    stream,
+    walk_turns,
+)
 from swarmtag.sim.model.state import WorldState
 from swarmtag.sim.outputs.trajectories import TrajectoryRecorder
 from swarmtag.sim.world.wms import operator_writes
@@ -105,7 +114,7 @@ def default_threads() -> int:
 
 
 class _Streams:
-    """Each run's generators of the kernel's streams, and of the walk's turns."""
+    """Each run's generators of the kernel's streams, and of the numbers drawn outside it."""
 
     def __init__(self, params: Params, seed: int, run_ids: list[int]) -> None:
         on = {
@@ -126,16 +135,36 @@ class _Streams:
             if params.walk_turn_ticks > 0
             else None
         )
+        self._rssi = (
+            [stream(seed, run, Stream.RSSI) for run in run_ids] if rssi_on(params) else None
+        )
         self._params = params
         self._runs = len(run_ids)
 
-    def turns(self, ticks: int) -> np.ndarray:
-        """The next ``ticks`` ticks' walk turns, shape (runs, ticks, robots, 2)."""
+    @property
+    def columns(self) -> int:
+        """Numbers per robot and tick that ``outside`` holds (its last axis)."""
+        return 2 + (self._params.carriers if self._rssi is not None else 0)
+
+    def outside(self, ticks: int) -> np.ndarray:
+        """The next ``ticks`` ticks' numbers drawn outside the kernel (``_tick.outside_row``).
+
+        Shape (runs, ticks, robots, columns): each robot's walk turn
+        ``(cos, sin)``, then its RSSI error factor per carrier; one row of
+        zeros when there are none.
+        """
         robots = self._params.robots
-        if self._walk is None:
+        if self._walk is None and self._rssi is None:
             return np.zeros((self._runs, 1, robots, 2))
-        uniform = np.stack([g.random((ticks, robots)) for g in self._walk])
-        return walk_turns(uniform, self._params)
+        numbers = np.zeros((self._runs, ticks, robots, self.columns))
+        if self._walk is not None:
+            uniform = np.stack([g.random((ticks, robots)) for g in self._walk])
+            numbers[..., 0:2] = walk_turns(uniform, self._params)
+        if self._rssi is not None:
+            shape = (ticks, robots, self._params.carriers)
+            gaussians = np.stack([g.standard_normal(shape) for g in self._rssi])
+            numbers[..., 2:] = rssi_factors(gaussians, self._params)
+        return numbers
 
 
 def _flush(x: Scratch, recorder: EventRecorder, breakdowns: np.ndarray) -> None:
@@ -249,12 +278,12 @@ class _Batch:
         if self.pool is not None:
             self.pool.shutdown()
 
-    def _kernel(self, rows: np.ndarray, stop: int, turns: np.ndarray, first: int) -> None:
+    def _kernel(self, rows: np.ndarray, stop: int, outside: np.ndarray, first: int) -> None:
         s = self.streams
         advance(
             rows,
             stop,
-            turns,
+            outside,
             first,
             s.states,
             self.world,
@@ -262,7 +291,7 @@ class _Batch:
             self.scratch,
         )
 
-    def _split_run(self, r: int, stop: int, turns: np.ndarray, first: int) -> None:
+    def _split_run(self, r: int, stop: int, outside: np.ndarray, first: int) -> None:
         """Run ``r`` tick by tick to ``stop``, its end, or a full event buffer (``_split``).
 
         Every thread runs ``split_ticks`` at once, this one part 0. If this
@@ -281,7 +310,7 @@ class _Batch:
                 parts,
                 r,
                 stop,
-                turns,
+                outside,
                 first,
                 s.states,
                 sync,
@@ -304,18 +333,19 @@ class _Batch:
         self.drawn[r] = sync[SYNC_DRAWN]
         self.indexed[r] = sync[SYNC_INDEXED]
 
-    def advance_to(self, stop: int, turns: np.ndarray, first: int) -> None:
+    def advance_to(self, stop: int, outside: np.ndarray, first: int) -> None:
         """Every running run to tick ``stop`` (empties buffers a run filled on the way)."""
         world = self.world
         while True:
             if self.split:
                 for r in range(world.run_tick.shape[0]):
-                    self._split_run(r, stop, turns, first)
+                    self._split_run(r, stop, outside, first)
             elif self.pool is None:
-                self._kernel(self.groups[0], stop, turns, first)
+                self._kernel(self.groups[0], stop, outside, first)
             else:
                 futures = [
-                    self.pool.submit(self._kernel, rows, stop, turns, first) for rows in self.groups
+                    self.pool.submit(self._kernel, rows, stop, outside, first)
+                    for rows in self.groups
                 ]
                 for future in futures:
                     future.result()
@@ -388,7 +418,11 @@ def simulate_fast(
     write_ticks = sorted({w.tick for w in params.scenario.reprioritisations})
     stepwise = record or check
     per_call = max(
-        1, min(_MAX_TICKS_PER_CALL, _WORK_PER_CALL // max(1, state.runs * params.robots))
+        1,
+        min(
+            _MAX_TICKS_PER_CALL,
+            _WORK_PER_CALL // max(1, state.runs * params.robots * (batch.streams.columns - 1)),
+        ),
     )
     position = start
     current = state
@@ -398,7 +432,7 @@ def simulate_fast(
             stop = min(end, position + (1 if stepwise else per_call))
             stop = min([stop, *(t for t in write_ticks if t > position)])
             before = current.copy() if check else None
-            batch.advance_to(stop, batch.streams.turns(stop - position), position + 1)
+            batch.advance_to(stop, batch.streams.outside(stop - position), position + 1)
             current = batch.state()
             tick_events = (
                 _tick_events(batch.scratch, (state.runs, params.robots)) if check else None

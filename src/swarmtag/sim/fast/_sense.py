@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from swarmtag.sim.fast._floor import hidden_by_shelves
 from swarmtag.sim.fast._geometry import segment_crosses_box, segment_near_point
 from swarmtag.sim.fast._grid import fill, near
@@ -215,7 +217,48 @@ def _camera(
 
 
 @inlined
-def _hear(r: int, n: int, t: int, slot: int, w: World, k: Constants, x: Scratch) -> None:
+def _heard(
+    r: int,
+    n: int,
+    c: int,
+    t: int,
+    slot: int,
+    distance: float,
+    outside: np.ndarray,
+    row: int,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """Robot ``n`` hears tag ``c``: its cache and, with BLE-led search, its RSSI estimate.
+
+    ``sense.ranged`` for one pair: the distance the RSSI implies (times this
+    tick's error factor, ``outside[r, row, n, 2 + c]``) starts the estimate
+    or moves it by ``rssi_smoothing``.
+    """
+    if k.radio_search:
+        sample = distance
+        if k.rssi_sigma > 0:
+            sample = distance * outside[r, row, n, 2 + c]
+        if w.heard_tick[r, n, c] < 0:
+            w.rssi[r, n, c] = sample
+        else:
+            w.rssi[r, n, c] = w.rssi[r, n, c] + k.rssi_smoothing * (sample - w.rssi[r, n, c])
+    hear(r, n, c, t, w.adv_status[r, slot, c], w.adv_urgency[r, slot, c], w, k, x)
+
+
+@inlined
+def _hear(
+    r: int,
+    n: int,
+    t: int,
+    slot: int,
+    outside: np.ndarray,
+    row: int,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
     """Robot ``n`` hears this tick's advertisements in range (split perception)."""
     rx = w.robot_pos[r, n, 0]
     ry = w.robot_pos[r, n, 1]
@@ -237,11 +280,12 @@ def _hear(r: int, n: int, t: int, slot: int, w: World, k: Constants, x: Scratch)
         c = x.advertising[r, x.near_carriers[r, i] if k.radio_grid else i]
         ox = w.carrier_pos[r, c, 0] - rx
         oy = w.carrier_pos[r, c, 1] - ry
-        if not math.sqrt(ox * ox + oy * oy) <= k.radio_range:
+        distance = math.sqrt(ox * ox + oy * oy)
+        if not distance <= k.radio_range:
             continue
         if k.advertisement_loss > 0 and x.radio_draw[r, n, c] < k.advertisement_loss:
             continue
-        hear(r, n, c, t, w.adv_status[r, slot, c], w.adv_urgency[r, slot, c], w, k, x)
+        _heard(r, n, c, t, slot, distance, outside, row, w, k, x)
 
 
 @inlined
@@ -273,7 +317,17 @@ def _out_of_sight(r: int, rx: float, ry: float, k: Constants, x: Scratch) -> boo
 
 
 @inlined
-def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+def _sense_split_now(
+    r: int,
+    t: int,
+    lo: int,
+    hi: int,
+    outside: np.ndarray,
+    row: int,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
     """Split perception without memory, doing only the work that can change something.
 
     The radio loop visits the tags that advertise this tick; the camera only
@@ -283,7 +337,7 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
     """
     slot = (t - 1 - k.status_delay) % (k.status_delay + 1)
     for n in range(lo, hi):
-        _hear(r, n, t, slot, w, k, x)
+        _hear(r, n, t, slot, outside, row, w, k, x)
         x.seen_count[r, n] = 0
         if w.mode[r, n] != Mode.WALK:
             continue
@@ -316,16 +370,39 @@ def _sense_split_now(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x
 
 
 @inlined
-def sense_robots(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
-    """Sense tick ``t`` for robots ``lo .. hi - 1`` of run ``r`` (``sense.sense``)."""
+def sense_robots(
+    r: int,
+    t: int,
+    lo: int,
+    hi: int,
+    outside: np.ndarray,
+    row: int,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
+    """Sense tick ``t`` for robots ``lo .. hi - 1`` of run ``r`` (``sense.sense``).
+
+    ``outside[r, row]``: the tick's numbers drawn outside the kernel (``_tick.outside_row``).
+    """
     if k.split and k.memory_ticks == 0:
-        _sense_split_now(r, t, lo, hi, w, k, x)
+        _sense_split_now(r, t, lo, hi, outside, row, w, k, x)
     else:
-        _sense_every_pair(r, t, lo, hi, w, k, x)
+        _sense_every_pair(r, t, lo, hi, outside, row, w, k, x)
 
 
 @inlined
-def _sense_every_pair(r: int, t: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) -> None:
+def _sense_every_pair(
+    r: int,
+    t: int,
+    lo: int,
+    hi: int,
+    outside: np.ndarray,
+    row: int,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> None:
     """``sense.sense`` pair by pair: the disc model, and split perception with memory."""
     delay = k.status_delay
     slot = (t - 1 - delay) % (delay + 1)
@@ -349,7 +426,7 @@ def _sense_every_pair(r: int, t: int, lo: int, hi: int, w: World, k: Constants, 
             if lossy and x.radio_draw[r, n, c] < k.advertisement_loss:
                 heard = False
             if heard:
-                hear(r, n, c, t, w.adv_status[r, slot, c], w.adv_urgency[r, slot, c], w, k, x)
+                _heard(r, n, c, t, slot, distance, outside, row, w, k, x)
             if k.split and k.occlusion > 0 and visible:
                 visible = _line_of_sight(r, n, c, w, k, x)
             if visible:

@@ -74,7 +74,7 @@ from swarmtag.sim.fast._sync import (
     pause,
     sync_array,
 )
-from swarmtag.sim.fast._tick import start_call, tick_begin, tick_finish, tick_robots
+from swarmtag.sim.fast._tick import outside_row, start_call, tick_begin, tick_finish, tick_robots
 
 __all__ = ["SYNC_DRAWN", "SYNC_INDEXED", "split_sync", "split_ticks", "thread_scratch"]
 
@@ -268,7 +268,7 @@ def split_ticks(
     parts: int,
     r: int,
     stop: int,
-    turns: np.ndarray,
+    outside: np.ndarray,
     first: int,
     streams: np.ndarray,
     sync: np.ndarray,
@@ -302,7 +302,7 @@ def split_ticks(
             _draw_rest(r, streams, sync, k, x)
             return
         t = w.run_tick[r] + 1
-        row = t - first if k.walk_turn_ticks > 0 else 0
+        row = outside_row(t, first, k)
         if part == 0:
             tick_begin(r, t, parts == 1, w, k, x)  # one part: no thread 1 to index
         elif part == 1 and sync[SYNC_INDEXED] != t:  # a run's first tick
@@ -310,7 +310,7 @@ def split_ticks(
         drawn = _draw_rest(r, streams, sync, k, x)
         if not (drawn and barrier(sync, parts)):
             return
-        tick_robots(r, t, lo, hi, turns, row, w, k, x)
+        tick_robots(r, t, lo, hi, outside, row, w, k, x)
         if part == 0:  # tick t + 1's numbers may be drawn once step 2 is over
             sync[SYNC_DRAWN] = t + 1
             atomic_store(sync, SYNC_DRAW_AT, 0)

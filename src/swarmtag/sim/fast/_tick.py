@@ -7,7 +7,8 @@ event buffer could overflow; the caller empties the buffers and calls again.
 It holds no GIL, so the caller runs groups of runs on several threads at
 once: runs share no memory. Random numbers come from each run's own
 generators, the very streams the reference draws (``RandomSource``), in the
-same order; the correlated walk's turns come ready-made from the caller.
+same order; the numbers drawn outside the kernel (the correlated walk's turns, the
+RSSI's error factors) come ready-made from the caller (``outside_row``).
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from swarmtag.sim.fast._orders import place_orders_run
 from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._sense import sense_robots, tags_advertising
 
-__all__ = ["advance", "start_call", "tick_run"]
+__all__ = ["advance", "outside_drawn", "outside_row", "start_call", "tick_run"]
 
 ROBOT_BLOCK = 256
 """Robots a split run's thread takes through each phase in turn (``tick_robots``; 64 to
@@ -61,6 +62,24 @@ def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
 
 
 @inlined
+def outside_drawn(k: Constants) -> bool:
+    """Whether ticks have numbers drawn outside the kernel (walk turns, RSSI factors).
+
+    Then ``outside[r, row, n]`` holds robot ``n``'s walk turn ``(cos, sin)``
+    (zeros when the walk does not turn) and, from column 2, its RSSI error
+    factor per carrier (with BLE-led search and shadowing); else ``outside``
+    has one row of zeros.
+    """
+    return k.walk_turn_ticks > 0 or (k.radio_search and k.rssi_sigma > 0)
+
+
+@inlined
+def outside_row(t: int, first: int, k: Constants) -> int:
+    """The row of ``outside`` holding tick ``t``'s numbers (``first``: the first row's tick)."""
+    return t - first if outside_drawn(k) else 0
+
+
+@inlined
 def start_call(r: int, x: Scratch) -> None:
     """A kernel call's first tick of run ``r`` builds afresh what the caller may have changed.
 
@@ -76,7 +95,7 @@ def start_call(r: int, x: Scratch) -> None:
 def tick_run(
     r: int,
     t: int,
-    turns: np.ndarray,
+    outside: np.ndarray,
     row: int,
     streams: np.ndarray,
     w: World,
@@ -85,14 +104,14 @@ def tick_run(
 ) -> None:
     """Tick ``t`` of run ``r``: every phase of ``kernel.step`` but the operator writes.
 
-    ``turns[r, row]`` are the tick's walk turns (when the walk turns).
+    ``outside[r, row]`` are the tick's numbers drawn outside the kernel (``outside_row``).
     """
     draw(r, streams, k, x)
     tick_begin(r, t, True, w, k, x)
     robots = k.robots
-    sense_robots(r, t, 0, robots, w, k, x)
+    sense_robots(r, t, 0, robots, outside, row, w, k, x)
     break_down_robots(r, 0, robots, w, k, x)
-    decide_robots(r, t, 0, robots, turns, row, w, k, x)
+    decide_robots(r, t, 0, robots, outside, row, w, k, x)
     move_robots(r, 0, robots, w, k, x)
     resolve_run(r, w, k, x)
     tick_end(r, t, w, k, x)
@@ -123,7 +142,7 @@ def tick_robots(
     t: int,
     lo: int,
     hi: int,
-    turns: np.ndarray,
+    outside: np.ndarray,
     row: int,
     w: World,
     k: Constants,
@@ -141,9 +160,9 @@ def tick_robots(
     """
     for block in range(lo, hi, ROBOT_BLOCK):
         end = min(block + ROBOT_BLOCK, hi)
-        sense_robots(r, t, block, end, w, k, x)
+        sense_robots(r, t, block, end, outside, row, w, k, x)
         break_down_robots(r, block, end, w, k, x)
-        decide_robots(r, t, block, end, turns, row, w, k, x)
+        decide_robots(r, t, block, end, outside, row, w, k, x)
         move_robots(r, block, end, w, k, x)
         for n in range(block, end):
             start_body(r, n, w, k, x)
@@ -179,8 +198,8 @@ def tick_finish(r: int, t: int, w: World, k: Constants, x: Scratch) -> None:
 def _run_to(
     r: int,
     until: int,
-    turns: np.ndarray,
-    turns_from: int,
+    outside: np.ndarray,
+    outside_from: int,
     streams: np.ndarray,
     w: World,
     k: Constants,
@@ -192,8 +211,8 @@ def _run_to(
         if not room_for_tick(r, k.robots + k.pickup_slots.shape[0], x):
             return
         t = w.run_tick[r] + 1
-        row = t - turns_from if k.walk_turn_ticks > 0 else 0
-        tick_run(r, t, turns, row, streams, w, k, x)
+        row = outside_row(t, outside_from, k)
+        tick_run(r, t, outside, row, streams, w, k, x)
         w.run_tick[r] = t
 
 
@@ -201,8 +220,8 @@ def _run_to(
 def advance(
     rows: np.ndarray,
     until: int,
-    turns: np.ndarray,
-    turns_from: int,
+    outside: np.ndarray,
+    outside_from: int,
     streams: np.ndarray,
     w: World,
     k: Constants,
@@ -210,10 +229,10 @@ def advance(
 ) -> None:
     """Advance the runs ``rows`` to tick ``until`` (or their end, or until a buffer is full).
 
-    ``turns[r, t - turns_from]`` holds run ``r``'s walk turns of tick ``t``
-    (``(cos, sin)`` per robot) when the walk turns; ``streams[r]`` are run
+    ``outside[r, t - outside_from]`` holds run ``r``'s numbers of tick ``t`` drawn
+    outside the kernel (``outside_row``); ``streams[r]`` are run
     ``r``'s generator states (``_draws.STREAMS``' rows, ``_pcg``), advanced in place.
     """
     for i in range(rows.shape[0]):
         r = rows[i]
-        _run_to(r, until, turns, turns_from, streams, w, k, x)
+        _run_to(r, until, outside, outside_from, streams, w, k, x)

@@ -45,6 +45,10 @@ class ParamFields:
     """
     camera_far: float
     """Beyond this no carrier is seen: the camera range plus half its fade. [m]"""
+    rssi_sigma: float
+    """log10 of the RSSI distance's error factor, its standard deviation: shadowing / (10 n)."""
+    seek_margin: float
+    """A seeker tumbles when its tag's estimate exceeds the leg's least by this factor."""
     tick_us: int
     """The tick in whole microseconds: tags advertise on this grid. [us]"""
     walk_turn_ticks: int
@@ -85,6 +89,14 @@ class ParamFields:
     """How far a tag's advertisement is heard. (``radio.range``)"""
     advert_us: int
     """The tags' advertising interval. (``radio.interval``) [us]"""
+    radio_search: bool
+    """BLE-led search: head for the best-scoring heard tag before the camera sees it.
+    (``radio.search``)
+    """
+    rssi_smoothing: float
+    """Weight of a new RSSI distance in a robot's running estimate (1: latest only).
+    (``radio.smoothing``)
+    """
     camera_range: float
     """Robot centre to carrier centre within which a marker is read. (``camera.range``)"""
     occlusion: int
@@ -141,6 +153,8 @@ class ControllerFields:
     """Disc perception: the detection radius; split: the camera range (as far as robots see).
     [m]
     """
+    seek_margin: float
+    """A seeker tumbles when its tag's estimate exceeds the leg's least by this factor."""
     walk_turn_ticks: int
     """A walking robot turns its heading every so many ticks (0: never). [ticks]"""
     timeout_ticks: int
@@ -155,6 +169,14 @@ class ControllerFields:
     """How long a sidestep lasts. (``motion.sidestep_time``) [ticks]"""
     avoid_taken_faces: bool
     """Switch from a predock point another robot stands on. (``motion.avoid_taken_faces``)"""
+    radio_search: bool
+    """BLE-led search: head for the best-scoring heard tag before the camera sees it.
+    (``radio.search``)
+    """
+    rssi_smoothing: float
+    """Weight of a new RSSI distance in a robot's running estimate (1: latest only).
+    (``radio.smoothing``)
+    """
     dock_ticks: int
     """Centring under the carrier. (``timing.dock``) [ticks]"""
     lift_ticks: int

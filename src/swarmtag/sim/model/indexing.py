@@ -75,6 +75,7 @@ def to_walk(state: WorldState, mask: NDArray[np.bool_]) -> None:
     state.face[mask] = -1
     state.timer[mask] = 0
     state.redirect[mask] = True
+    state.seek[mask] = -1
 
 
 def in_dropoff(s: WorldState, params: Params, carrier: Int) -> NDArray[np.bool_]:

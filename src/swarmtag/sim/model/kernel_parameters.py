@@ -107,6 +107,19 @@ def _walk_turn_ticks(scenario: Scenario) -> int:
     return max(1, seconds_to_ticks(interval, scenario.tick)) if interval > 0 else 0
 
 
+def _seek_margin(scenario: Scenario) -> float:
+    """One standard deviation of a running RSSI estimate, as a factor (BLE-led search).
+
+    The smoothing's running mean of independent samples keeps
+    ``w / (2 - w)`` of their variance; a seeker takes a rise by less than
+    that for noise.
+    """
+    radio = scenario.radio
+    sigma = radio.shadowing / (10.0 * radio.path_loss_exponent)
+    weight = radio.smoothing
+    return float(10.0 ** (sigma * math.sqrt(weight / (2.0 - weight))))
+
+
 DERIVED: Final[tuple[KernelParameter, ...]] = (
     KernelParameter("robots", int, "", "Robots per run.", lambda s: s.robots),
     KernelParameter(
@@ -198,6 +211,21 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
         "m",
         "Beyond this no carrier is seen: the camera range plus half its fade.",
         lambda s: s.camera.range + s.camera.fade / 2,
+    ),
+    KernelParameter(
+        "rssi_sigma",
+        float,
+        "",
+        "log10 of the RSSI distance's error factor, its standard deviation: shadowing / (10 n).",
+        lambda s: s.radio.shadowing / (10.0 * s.radio.path_loss_exponent),
+    ),
+    KernelParameter(
+        "seek_margin",
+        float,
+        "",
+        "A seeker tumbles when its tag's estimate exceeds the leg's least by this factor.",
+        _seek_margin,
+        controller=True,
     ),
     KernelParameter(
         "tick_us",

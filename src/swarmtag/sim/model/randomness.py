@@ -22,10 +22,14 @@ k   stream     draws
                sees carrier ``c`` only within ``far - u * fade``
                (``camera_far``: the range plus half the fade), a linear
                detection ramp centred on the camera range
+7   rssi       per tick ``standard_normal((N, C))``: with BLE-led search,
+               the distance robot ``r`` reads from carrier ``c``'s RSSI is
+               the true one times ``10 ** (g * rssi_sigma)`` (``rssi_factors``,
+               outside every kernel like the walk's turns)
 ==  =========  =============================================================
 
 Every tick draws the full block of each stream, used or not, so no number
-depends on what other robots did. Streams 2-6 are only drawn when their
+depends on what other robots did. Streams 2-7 are only drawn when their
 option is on; being separate streams, switching one on changes no other
 number. Blocks for many ticks are drawn at once (``chunk``), which gives the
 same numbers as drawing tick by tick. A normalised direction is
@@ -54,6 +58,8 @@ __all__ = [
     "TickInputs",
     "check_seed",
     "due_writes",
+    "rssi_factors",
+    "rssi_on",
     "stream",
     "unit_vectors",
     "walk_turns",
@@ -74,6 +80,7 @@ class Stream(IntEnum):
     CAMERA = 4
     WALK = 5
     SIGHT = 6
+    RSSI = 7
 
 
 def check_seed(seed: object) -> int:
@@ -115,6 +122,22 @@ def walk_turns(uniform: Float, params: Params) -> Float:
     return turns
 
 
+def rssi_on(params: Params) -> bool:
+    """Whether runs of ``params`` draw the RSSI stream: BLE-led search with shadowing."""
+    return params.radio_search and params.rssi_sigma > 0
+
+
+def rssi_factors(gaussians: Float, params: Params) -> Float:
+    """Error factors of RSSI distances from the rssi stream's Gaussian numbers.
+
+    ``10 ** (g * rssi_sigma)``: log-normal shadowing of ``shadowing`` dB in
+    the log-distance path-loss model. Every backend takes its factors from
+    here (one numpy call, as for the walk's turns).
+    """
+    factors: Float = np.power(10.0, gaussians * params.rssi_sigma)
+    return factors
+
+
 @dataclass(frozen=True, eq=False)
 class TickInputs:
     """The random numbers of one tick, already turned into what the kernel uses.
@@ -125,7 +148,9 @@ class TickInputs:
     the detection error in metres (``None``: exact); ``turn`` (R, N, 2) is
     each robot's walk turn as ``(cos, sin)`` (``None``: the walk does not turn);
     ``sight`` (R, N, C) how far each robot sees each carrier this tick
-    (``None``: ``camera_range``, a hard disc).
+    (``None``: ``camera_range``, a hard disc); ``rssi`` (R, N, C) the error
+    factor of the distance each robot reads from each tag's RSSI (``None``:
+    exact, or no BLE-led search).
     """
 
     walk: Float
@@ -135,6 +160,7 @@ class TickInputs:
     noise: Float | None = None
     turn: Float | None = None
     sight: Float | None = None
+    rssi: Float | None = None
     writes: tuple[Reprioritisation, ...] = ()
 
     @classmethod
@@ -196,6 +222,8 @@ class RandomSource:
             self._purposes[Stream.WALK] = (n,)
         if params.camera_fade > 0:
             self._purposes[Stream.SIGHT] = (n, c)
+        if rssi_on(params):
+            self._purposes[Stream.RSSI] = (n, c)
         if chunk is None:
             largest = max(int(np.prod(shape)) for shape in self._purposes.values())
             chunk = max(1, min(_MAX_CHUNK, _BLOCK_BYTES // (8 * largest)))
@@ -233,7 +261,7 @@ class RandomSource:
             self._first, row = tick, 0
         motion = self._blocks[Stream.MOTION][row]
         params = self._params
-        heard = noise = turn = sight = None
+        heard = noise = turn = sight = rssi = None
         breakdown = np.zeros(motion.shape[:2], dtype=bool)
         if Stream.BREAKDOWN in self._blocks:
             breakdown = self._blocks[Stream.BREAKDOWN][row] < params.breakdown
@@ -245,6 +273,8 @@ class RandomSource:
             turn = walk_turns(self._blocks[Stream.WALK][row], params)
         if Stream.SIGHT in self._blocks:
             sight = params.camera_far - self._blocks[Stream.SIGHT][row] * params.camera_fade
+        if Stream.RSSI in self._blocks:
+            rssi = rssi_factors(self._blocks[Stream.RSSI][row], params)
         return TickInputs(
             walk=unit_vectors(motion[..., 0:2]),
             sidestep=unit_vectors(motion[..., 2:4]),
@@ -253,5 +283,6 @@ class RandomSource:
             noise=noise,
             turn=turn,
             sight=sight,
+            rssi=rssi,
             writes=due_writes(params, tick),
         )

@@ -112,8 +112,15 @@ class WorldState:
     """(R, N, C) tick in which the robot's camera last saw each carrier; -1 never."""
     seen_pos: Float
     """(R, N, C, 2) where the camera saw each carrier then (true position plus camera noise)."""
+    rssi: Float
+    """(R, N, C) each robot's running distance estimate to each tag from its RSSI (BLE-led
+    search; meaningful once the tag was heard, 0 before)."""
     walk_clock: Int
     """(R, N) ticks since the walking robot last took a new heading (correlated walk)."""
+    seek: Int
+    """(R, N) the tag a walking robot seeks by its signal (BLE-led search); -1 none."""
+    seek_ref: Float
+    """(R, N) the seeker's estimate of its tag's distance when it last compared one."""
     # carriers and their tags
     carrier_pos: Float
     """(R, C, 2) centre, metres."""
@@ -384,7 +391,10 @@ def initial_state(
         heard_tick=np.full(pairs, -1, dtype=np.int64),
         seen_tick=np.full(pairs, -1, dtype=np.int64),
         seen_pos=np.zeros((*pairs, 2)),
+        rssi=np.zeros(pairs),
         walk_clock=robots(0),
+        seek=robots(-1),
+        seek_ref=np.zeros((runs, n)),
         carrier_pos=carrier_pos,
         status=status,
         urgency=urgency0.copy(),

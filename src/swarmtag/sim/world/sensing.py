@@ -23,6 +23,9 @@ the last status and urgency it heard per tag (its BLE cache). Two models:
   ``detection_radius`` is seen and heard (unless lost), every tick.
 
 The distance used for selection is from the robot to the known position.
+With BLE-led search (``radio.search``) each heard advertisement also
+updates the robot's running distance estimate of that tag from its RSSI
+(``ranged``), which the controller uses for tags it has not seen.
 """
 
 from __future__ import annotations
@@ -48,6 +51,7 @@ __all__ = [
     "advertised",
     "advertising",
     "line_of_sight",
+    "ranged",
     "sense",
     "sensed_state",
 ]
@@ -74,6 +78,8 @@ class Senses:
     """Tick of each robot's last sighting of each carrier, this tick's included (-1 never)."""
     seen_pos: Float
     """Where each robot last saw each carrier."""
+    rssi: Float | None
+    """Each robot's running RSSI distance estimate per tag after this tick (None: no search)."""
 
 
 def advertised(state: WorldState, params: Params) -> tuple[NDArray[np.int8], NDArray[np.int8]]:
@@ -211,6 +217,7 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     known_status = np.where(heard, status[:, None, :], state.known_status)
     known_urgency = np.where(heard, urgency[:, None, :], state.known_urgency)
     heard_tick = np.where(heard, t, state.heard_tick)
+    rssi = ranged(state, heard, distance, inputs, params) if params.radio_search else None
     if params.split and params.memory_ticks == 0:
         visible = visible & actionable(state, known_status)
     if params.split and params.occlusion:
@@ -236,17 +243,36 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         heard_tick=heard_tick,
         seen_tick=seen_tick,
         seen_pos=seen_pos,
+        rssi=rssi,
     )
+
+
+def ranged(
+    state: WorldState, heard: NDArray[np.bool_], distance: Float, inputs: TickInputs, params: Params
+) -> Float:
+    """(R, N, C): the robots' RSSI distance estimates after this tick's advertisements.
+
+    An advertisement heard gives the distance its RSSI implies (the true one
+    times this tick's error factor); the estimate is that distance at a
+    tag's first hearing, else moves ``rssi_smoothing`` of the way to it.
+    """
+    sample = distance if inputs.rssi is None else distance * inputs.rssi
+    first = state.heard_tick < 0
+    moved = state.rssi + params.rssi_smoothing * (sample - state.rssi)
+    estimate: Float = np.where(heard, np.where(first, sample, moved), state.rssi)
+    return estimate
 
 
 def sensed_state(state: WorldState, senses: Senses) -> WorldState:
     """A copy of ``state`` as tick ``state.tick + 1`` begins, with the caches of ``senses``."""
+    copied = state.copy()
     return replace(
-        state.copy(),
+        copied,
         tick=state.tick + 1,
         known_status=senses.known_status,
         known_urgency=senses.known_urgency,
         heard_tick=senses.heard_tick,
         seen_tick=senses.seen_tick,
         seen_pos=senses.seen_pos,
+        rssi=copied.rssi if senses.rssi is None else senses.rssi,
     )
