@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 from typing import Any
 
@@ -128,7 +129,10 @@ def test_reproduce_runs_only_the_spec_studies_by_default(tmp_path, capsys, monke
         raise StudyError("stopped")
 
     monkeypatch.setattr("swarmtag.experiments.load_study", load)
-    monkeypatch.setattr("swarmtag.experiments.run_study", stop)
+    # the package's reproduce() shadows its module's name: patch the module itself
+    monkeypatch.setattr(
+        importlib.import_module("swarmtag.experiments.reproduce"), "run_study", stop
+    )
     with pytest.raises(SystemExit) as exited:
         main(["reproduce", "--quick", "--out", str(tmp_path / "out"), "--workers", "1"])
     assert exited.value.code == 2

@@ -13,7 +13,13 @@ from collections.abc import Sequence
 from typing import Final
 
 from swarmtag.analysis.choices import CHOICE_COUNTS, ConditionChoices
-from swarmtag.analysis.tables import _html, _latex, _markdown, format_interval, format_number
+from swarmtag.analysis.tables import (
+    _latex,
+    format_interval,
+    format_number,
+    html_table,
+    markdown_table,
+)
 
 __all__ = [
     "UNKNOWN",
@@ -90,7 +96,7 @@ def choice_notes(choices: Sequence[ConditionChoices]) -> list[str]:
 def choices_markdown(choices: Sequence[ConditionChoices]) -> str:
     """The choice table as Markdown, then its notes."""
     header, rows = choice_rows(choices)
-    return _markdown(header, rows) + "\n\n" + "\n".join(choice_notes(choices)) + "\n"
+    return markdown_table(header, rows) + "\n\n" + "\n".join(choice_notes(choices)) + "\n"
 
 
 def choices_latex(choices: Sequence[ConditionChoices]) -> str:
@@ -104,4 +110,4 @@ def choices_html(choices: Sequence[ConditionChoices]) -> str:
     """The choice table as an HTML ``<table>``, then its notes."""
     header, rows = choice_rows(choices)
     notes = [f'<p class="note">{html.escape(note)}</p>' for note in choice_notes(choices)]
-    return "\n".join([_html(header, rows), *notes])
+    return "\n".join([html_table(header, rows), *notes])

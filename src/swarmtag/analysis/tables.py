@@ -30,8 +30,10 @@ __all__ = [
     "format_interval",
     "format_number",
     "format_p_value",
+    "html_table",
     "html_tables",
     "latex_tables",
+    "markdown_table",
     "markdown_tables",
     "metric_cells",
     "metric_label",
@@ -178,7 +180,8 @@ def _rows(report: MetricsReport) -> tuple[list[str], list[list[str]], list[str],
     return ["Metric", *names], value_rows, diff_header, diff_rows
 
 
-def _markdown(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    """A Markdown table of text cells (not escaped: numbers and names)."""
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     lines += ["| " + " | ".join(row) + " |" for row in rows]
     return "\n".join(lines)
@@ -240,9 +243,9 @@ def _notes(report: MetricsReport) -> list[str]:
 def markdown_tables(report: MetricsReport) -> str:
     """The value table and the difference table of a report, as Markdown, then the notes."""
     header, values, diff_header, diffs = _rows(report)
-    parts = [_markdown(header, values)]
+    parts = [markdown_table(header, values)]
     if diffs:
-        parts.append(_markdown(diff_header, diffs))
+        parts.append(markdown_table(diff_header, diffs))
     parts.append("\n".join(_notes(report)))
     return "\n\n".join(parts) + "\n"
 
@@ -284,7 +287,8 @@ def latex_tables(report: MetricsReport) -> str:
     return "\n\n".join(parts) + "\n"
 
 
-def _html(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+def html_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    """An HTML ``<table>`` of text cells, each escaped."""
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join(
         "<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in row) + "</tr>" for row in rows
@@ -295,9 +299,9 @@ def _html(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
 def html_tables(report: MetricsReport) -> str:
     """The same tables as HTML ``<table>`` elements, with the note as a paragraph."""
     header, values, diff_header, diffs = _rows(report)
-    parts = [_html(header, values)]
+    parts = [html_table(header, values)]
     if diffs:
-        parts.append(_html(diff_header, diffs))
+        parts.append(html_table(diff_header, diffs))
     parts += [f'<p class="note">{html.escape(note)}</p>' for note in _notes(report)]
     return "\n".join(parts)
 
@@ -365,7 +369,7 @@ def scalability_table(
     header = _SCALABILITY_HEADER
     notes = scalability_notes(reports, condition=condition)
     if markdown:
-        return "\n\n".join([_markdown(header, rows), *notes]) + "\n"
+        return "\n\n".join([markdown_table(header, rows), *notes]) + "\n"
     return "\n".join([_latex(header, rows), *("% " + note for note in notes)]) + "\n"
 
 
@@ -384,6 +388,6 @@ def scalability_notes(reports: Mapping[str, MetricsReport], *, condition: str) -
 
 def scalability_html(reports: Mapping[str, MetricsReport], *, condition: str) -> str:
     """The scalability table as an HTML ``<table>``, then its notes."""
-    table = _html(_SCALABILITY_HEADER, _scalability_rows(reports, condition=condition))
+    table = html_table(_SCALABILITY_HEADER, _scalability_rows(reports, condition=condition))
     notes = scalability_notes(reports, condition=condition)
     return "\n".join([table, *(f'<p class="note">{html.escape(n)}</p>' for n in notes)])

@@ -180,6 +180,15 @@ def report_cmd(
     show_default=True,
     help="Results folder: store, metrics, tables, figures and report.html.",
 )
+@click.option(
+    "--seeds",
+    type=click.IntRange(min=1),  # the upper bound is the library's (MAX_SEEDS), checked there
+    default=1,
+    show_default=True,
+    metavar="K",
+    help="Run every study at its master seed + 0 .. K-1 and judge the published directions "
+    "over the K seeds (DIR/seeds.md; docs/experiments.md).",
+)
 @backend_option
 @workers_option
 @scheduler_option
@@ -189,47 +198,43 @@ def reproduce(
     quick: bool,
     sources: tuple[str, ...],
     out_dir: Path,
+    seeds: int,
     backend: str | None,
     workers: int | None,
     scheduler: str | None,
     progress: bool | None,
 ) -> None:
     """Run the published studies (resuming what is stored) and write the report."""
-    from swarmtag.experiments import run_study  # noqa: PLC0415 - DuckDB is an extra
-    from swarmtag.experiments.report import (  # noqa: PLC0415
-        StudyRecord,
-        write_report,
-        write_run_record,
-    )
+    # The experiments extra (DuckDB) loads only when a study is run.
+    from swarmtag.experiments.reproduce import StudyRun  # noqa: PLC0415
+    from swarmtag.experiments.reproduce import reproduce as run_all  # noqa: PLC0415
+    from swarmtag.experiments.seed_tables import console_lines  # noqa: PLC0415
 
     studies = _studies(sources, None)
     show = sys.stderr.isatty() if progress is None else progress
     _note([backend if backend is not None else spec.backend for spec in studies], scheduler)
-    started = time.perf_counter()
-    results = []
-    for spec in studies:
-        begin = time.perf_counter()
-        result = run_study(
-            spec,
-            out_dir=out_dir,
-            quick=quick,
-            workers=workers,
-            scheduler=scheduler,
-            progress=show,
-            backend=backend,
-        )
-        wall = time.perf_counter() - begin
-        results.append(result)
-        record = StudyRecord(
-            wall_time_s=wall,
-            quick=quick,
-            computed_runs=result.computed_runs,
-            reused_runs=result.reused_runs,
-        )
-        write_run_record(out_dir, spec, record)
+
+    def echo(run: StudyRun) -> None:
+        seed = f" (seed {run.seed})" if seeds > 1 else ""
         click.echo(
-            f"{spec.name}: {result.computed_runs} runs computed, {result.reused_runs} reused, "
-            f"{wall:.1f} s"
+            f"{run.study}{seed}: {run.computed_runs} runs computed, {run.reused_runs} reused, "
+            f"{run.wall_time_s:.1f} s"
         )
-    path = write_report(out_dir, studies, computed=results)
-    click.echo(f"report: {path} ({time.perf_counter() - started:.1f} s in all)")
+
+    started = time.perf_counter()
+    done = run_all(
+        studies,
+        out_dir=out_dir,
+        seeds=seeds,
+        quick=quick,
+        workers=workers,
+        scheduler=scheduler,
+        progress=show,
+        backend=backend,
+        on_study=echo,
+    )
+    for line in console_lines(done.robustness):
+        click.echo(line)
+    for path in done.summary_files:
+        click.echo(f"seeds summary: {path}")
+    click.echo(f"report: {done.report} ({time.perf_counter() - started:.1f} s in all)")

@@ -17,7 +17,12 @@
   local process pool or Dask cluster (``execute.py``);
 - ``run_study``: chunks of missing runs in parallel, stored as they finish,
   metrics per scale (``runner.py``; a warehouse scale's over the orders
-  placed after its warm-up, ``kpi_log``).
+  placed after its warm-up, ``kpi_log``);
+- ``reproduce``: every study at ``seeds`` master seeds (``seeded_study``:
+  its seed + 0 .. K-1) and the report (``reproduce.py``); ``DIRECTIONS``:
+  SPEC §6's published directions as ``Direction`` records with a ``Shift``,
+  ``Close`` or ``Trend`` rule (``directions.py``), judged per seed and
+  summarised over the seeds as ``ClaimSummary`` records (``robustness.py``).
 
 See docs/experiments.md for the study file format, the store's schema and how resume works.
 """
@@ -25,7 +30,17 @@ See docs/experiments.md for the study file format, the store's schema and how re
 from __future__ import annotations
 
 from swarmtag.experiments.chunks import ChunkJob, simulate_chunk, split_runs
+from swarmtag.experiments.directions import DIRECTIONS, Close, Direction, Shift, Trend
 from swarmtag.experiments.registry import REPRODUCED, STUDIES, load_study, study_path
+from swarmtag.experiments.reproduce import (
+    MAX_SEEDS,
+    Reproduction,
+    StudyRun,
+    reproduce,
+    seed_folder,
+    seeded_study,
+)
+from swarmtag.experiments.robustness import ClaimSummary
 from swarmtag.experiments.runner import (
     QUICK_RESAMPLES,
     STORE_NAME,
@@ -40,7 +55,9 @@ from swarmtag.experiments.store import KEY_COLUMNS, SCHEMA_SQL, ResultsStore, Ru
 
 __all__ = [
     "DEFAULT_SCALE",
+    "DIRECTIONS",
     "KEY_COLUMNS",
+    "MAX_SEEDS",
     "QUICK_RESAMPLES",
     "REPRODUCED",
     "SCHEMA_SQL",
@@ -48,16 +65,26 @@ __all__ = [
     "STUDIES",
     "URGENCY_MODELS",
     "ChunkJob",
+    "ClaimSummary",
+    "Close",
+    "Direction",
+    "Reproduction",
     "ResultsStore",
     "RunKey",
     "Scale",
+    "Shift",
     "Study",
     "StudyResult",
+    "StudyRun",
+    "Trend",
     "kpi_log",
     "load_study",
     "plan_chunks",
     "read_study_file",
+    "reproduce",
     "run_study",
+    "seed_folder",
+    "seeded_study",
     "simulate_chunk",
     "split_runs",
     "study_key",

@@ -207,11 +207,14 @@ def _study_sections(
     target_dir: Path,
     study: Study,
     *,
+    store: Path,
     resamples: int | None,
     export_format: str,
     computed: Sequence[StudyResult],
 ) -> list[Section]:
-    """Read ``study``'s runs from ``out_dir``; write its logs, tables, figures in ``target_dir``.
+    """Read ``study``'s runs from ``store`` and its run record from ``out_dir``.
+
+    Its logs, tables and figures go to ``target_dir``.
 
     A summary in ``computed`` (``run_study``'s, this process) of the same
     study, runs and resamples is used as it is rather than bootstrapped again.
@@ -219,8 +222,8 @@ def _study_sections(
     from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
 
     record = _read_record(out_dir, study)
-    with ResultsStore(out_dir / STORE_NAME, read_only=True) as store:
-        runs = _stored_runs(store, study)
+    with ResultsStore(store, read_only=True) as stored:
+        runs = _stored_runs(stored, study)
         if resamples is None:
             quick = record is not None and record.quick
             resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
@@ -232,12 +235,12 @@ def _study_sections(
             ),
             {},
         )
-        reports = _scale_reports(store, study, runs, resamples, known)
+        reports = _scale_reports(stored, study, runs, resamples, known)
         for part in study.scales:
             target = target_dir / study.name / part.key
             target.mkdir(parents=True, exist_ok=True)
             key = study_key(study, part.key)
-            store.export(key, study.conditions, runs, target, fmt=export_format)
+            stored.export(key, study.conditions, runs, target, fmt=export_format)
     sections = []
     for index, (scale, result) in enumerate(reports.items()):
         report, choices = result.report, result.choices
@@ -286,6 +289,8 @@ def write_report(
     resamples: int | None = None,
     export_format: str = "csv",
     computed: Sequence[StudyResult] = (),
+    store: str | os.PathLike[str] | None = None,
+    sections: Sequence[Section] = (),
 ) -> Path:
     """Event logs, tables, figures and ``report.html`` of ``studies`` from ``out_dir``'s store.
 
@@ -293,22 +298,27 @@ def write_report(
     event logs of every scale are exported as ``carriers.<fmt>`` and
     ``events.<fmt>`` (``export_format``: ``csv`` or ``parquet``). ``computed``:
     ``run_study`` results of this process whose summaries match are reused
-    (the same numbers, computed once).
+    (the same numbers, computed once). ``store``: the results store file
+    (default ``out_dir/results.duckdb``). ``sections`` close the report
+    (the robustness over master seeds).
     """
     folder = check_path(out_dir, what="DIR", error=StudyError)
-    if not is_regular_file(folder / STORE_NAME):
-        msg = f"{folder}: no results store ({STORE_NAME}) here; run the studies first"
+    store_path = folder / STORE_NAME if store is None else Path(store)
+    if not is_regular_file(store_path):
+        where = folder if store is None else store_path.parent
+        msg = f"{where}: no results store ({store_path.name}) here; run the studies first"
         raise StudyError(msg)
     plan = OutputPlan(error=StudyError)
     plan.folder("DIR", folder)
     with plan.writing() as stage:  # every file of the report, or none of them
         staged = stage.path(folder)
-        sections = []
+        parts = []
         for study in studies:
-            sections += _study_sections(
+            parts += _study_sections(
                 folder,
                 staged,
                 study,
+                store=store_path,
                 resamples=resamples,
                 export_format=export_format,
                 computed=computed,
@@ -316,7 +326,7 @@ def write_report(
         write_html(
             staged / REPORT_NAME,
             "swarmtag reproduction report",
-            sections,
+            [*parts, *sections],
             facts={"swarmtag": __version__, "studies": ", ".join(s.name for s in studies)},
         )
     return folder / REPORT_NAME

@@ -275,6 +275,7 @@ def run_study(
     scheduler: str | None = None,
     progress: bool = False,
     backend: str | None = None,
+    store: str | os.PathLike[str] | None = None,
 ) -> StudyResult:
     """Compute the runs of ``study`` missing from the store in ``out_dir``, then its metrics.
 
@@ -284,7 +285,10 @@ def run_study(
     compiled backend (``backend``, else the study's, else the default) the
     chunks run in this process, each on ``workers`` threads. ``quick``
     runs ``study.quick_runs`` per condition and at most ``QUICK_RESAMPLES``
-    bootstrap resamples.
+    bootstrap resamples. ``store`` is the results store file, by default
+    ``out_dir/results.duckdb``; a reproduction over several master seeds
+    keeps every seed's runs in one store and each seed's outputs in a folder
+    of their own.
     Returns where everything went; writes ``metrics.json`` per scale.
     """
     if workers is not None and scheduler is not None:
@@ -296,20 +300,21 @@ def run_study(
     in_threads = job_backend == "fast" and scheduler is None
     folder = check_path(out_dir, what="--out", error=StudyError)
     check_path(folder / study.name / "progress.json", what="--out", error=StudyError)
+    store_path = folder / STORE_NAME if store is None else Path(store)
     runs = study.run_count(quick=quick)
     check_study_memory(study, runs, quick=quick)
     study_dir = folder / study.name
     progress_path = study_dir / "progress.json"
     total = runs * len(study.conditions) * len(study.scales)
-    stores = (folder / STORE_NAME, folder / f"{STORE_NAME}.wal", progress_path)
+    stores = (store_path, store_path.with_name(f"{store_path.name}.wal"), progress_path)
     scale_dirs = [study_dir / scale.key for scale in study.scales]
     with _Created(folder, study_dir, *stores, *scale_dirs) as created:
         _prepare_folder(folder, study.name)
-        with ResultsStore(folder / STORE_NAME) as store:
+        with ResultsStore(store_path) as runs_store:
             jobs = sorted(
                 plan_chunks(
                     study,
-                    store,
+                    runs_store,
                     quick=quick,
                     backend=job_backend,
                     threads=threads,
@@ -332,7 +337,7 @@ def run_study(
 
                 def store_chunk(job: ChunkJob, logs: ChunkResult) -> None:
                     nonlocal done
-                    done += store.write_chunk(job.key, *logs)
+                    done += runs_store.write_chunk(job.key, *logs)
                     created.keep(*stores)  # they hold completed work now: the next run resumes
                     _write_progress(progress_path, done, total)
                     bar.update(task, completed=done)
@@ -344,10 +349,10 @@ def run_study(
                 else:
                     run_local(jobs, workers or os.cpu_count() or 1, store_chunk)
             resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
-            reports, metrics, paths = _summaries(study, store, study_dir, runs, resamples)
+            reports, metrics, paths = _summaries(study, runs_store, study_dir, runs, resamples)
     return StudyResult(
         study=study.name,
-        store=folder / STORE_NAME,
+        store=store_path,
         metrics_paths=paths,
         metrics=metrics,
         computed_runs=todo,
