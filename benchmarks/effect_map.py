@@ -150,20 +150,27 @@ def summarise(seeds: list[dict[str, Any]]) -> dict[str, Any]:
     return summary
 
 
-def figure(rows: list[dict[str, Any]], ranges: list[float], mechanisms: list[str], path: Path) -> None:
+def figure(
+    rows: list[dict[str, Any]], ranges: list[float], mechanisms: list[str], path: Path
+) -> None:
     """Two heat maps over range x mechanism: the PA gain and the throughput change."""
     plt = pyplot()
     grid = {(r["mechanism"], r["camera"]): r for r in rows}
     panels = (
         ("d_pa", "significant_pa", "PA gain at alpha 0.7 (published +0.23)", "RdBu", 0.4),
-        ("rel_throughput", "significant_throughput", "throughput change (published -1.2 %)",
-         "RdBu", 0.4),
+        (
+            "rel_throughput",
+            "significant_throughput",
+            "throughput change (published -1.2 %)",
+            "RdBu",
+            0.4,
+        ),
     )
-    fig, axes = plt.subplots(1, 2, figsize=(12, 0.9 * len(mechanisms) + 2.2), constrained_layout=True)
+    fig, axes = plt.subplots(
+        1, 2, figsize=(12, 0.9 * len(mechanisms) + 2.2), constrained_layout=True
+    )
     for ax, (key, significant, title, cmap, limit) in zip(axes, panels, strict=True):
-        values = np.array(
-            [[grid[(m, c)][key] for c in ranges] for m in mechanisms], dtype=float
-        )
+        values = np.array([[grid[(m, c)][key] for c in ranges] for m in mechanisms], dtype=float)
         image = ax.imshow(values, cmap=cmap, vmin=-limit, vmax=limit, aspect="auto")
         for i, mechanism in enumerate(mechanisms):
             for j, camera in enumerate(ranges):
@@ -188,17 +195,18 @@ def figure(rows: list[dict[str, Any]], ranges: list[float], mechanisms: list[str
 
 def table(rows: list[dict[str, Any]]) -> str:
     """The map as a markdown table, one row per cell."""
-    lines = [
-        "| mechanism | camera | dock (s) | fit | 2+ candidates | ΔPA (sig.) | ΔP95 | Δmean | Δthroughput (sig.) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for r in rows:
-        lines.append(
-            f"| {r['mechanism']} | {r['camera']:g} m | {r['dock']:.1f} | {r['objective']:.2f} | "
-            f"{100 * r['share_2plus']:.0f} % | {r['d_pa']:+.3f} ({r['significant_pa']}/{r['seeds']}) | "
-            f"{100 * r['rel_p95_latency']:+.1f} % | {100 * r['rel_mean_latency']:+.1f} % | "
-            f"{100 * r['rel_throughput']:+.1f} % ({r['significant_throughput']}/{r['seeds']}) |"
-        )
+    header = (
+        "| mechanism | camera | dock (s) | fit | 2+ candidates | ΔPA (sig.) | ΔP95 | Δmean "
+        "| Δthroughput (sig.) |"
+    )
+    lines = [header, "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines.extend(
+        f"| {r['mechanism']} | {r['camera']:g} m | {r['dock']:.1f} | {r['objective']:.2f} | "
+        f"{100 * r['share_2plus']:.0f} % | {r['d_pa']:+.3f} ({r['significant_pa']}/{r['seeds']})"
+        f" | {100 * r['rel_p95_latency']:+.1f} % | {100 * r['rel_mean_latency']:+.1f} % | "
+        f"{100 * r['rel_throughput']:+.1f} % ({r['significant_throughput']}/{r['seeds']}) |"
+        for r in rows
+    )
     return "\n".join(lines) + "\n"
 
 
