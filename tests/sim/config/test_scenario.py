@@ -197,3 +197,31 @@ def test_a_camera_fade_is_at_most_twice_the_range():
         Camera(range=0.5, fade=1.2)
     with pytest.raises(ConfigError, match=r"camera\.fade: -0\.1 is not a number"):
         Camera(fade=-0.1)
+
+
+def test_perception_can_grow_with_the_arena_and_is_fixed_by_default():
+    from swarmtag.policy import Proximity
+    from swarmtag.sim.model.params import make_params
+
+    fixed = Scenario.default(20, 40)
+    grown = Scenario.default(20, 40).to_mapping() | {"perception_scaling": "arena"}
+    scaled = Scenario.from_mapping(grown)
+    factor = (40 / 7) ** 0.5
+    assert fixed.perception_factor == 1.0
+    assert scaled.perception_factor == pytest.approx(factor)
+    assert scaled.camera.range == fixed.camera.range  # the declared camera stays
+    a, b = make_params(fixed, Proximity()), make_params(scaled, Proximity())
+    assert a.camera_range == fixed.camera.range
+    assert b.camera_range == pytest.approx(3.6 * factor)  # 8.6 m at 20 / 40
+    assert b.detection_radius == b.camera_range == b.camera_far
+    assert Scenario.from_mapping(scaled.to_mapping()) == scaled  # no double scaling
+    with pytest.raises(ConfigError, match="perception_scaling"):
+        Scenario(perception_scaling="camera")
+
+
+def test_perception_scaling_is_refused_on_a_warehouse_floor():
+    from swarmtag.sim import load_profile
+
+    part = {"map": "small-warehouse", "order_interval": 60.0}
+    with pytest.raises(ConfigError, match="perception_scaling: 'arena'"):
+        load_profile("lab").scenario({"warehouse": part, "perception_scaling": "arena"})

@@ -60,6 +60,7 @@ _SCALARS: Final = (
     "perception",
     "time_unit",
     "arena_scaling",
+    "perception_scaling",
 )
 _EVENTS: Final = "reprioritisations"
 

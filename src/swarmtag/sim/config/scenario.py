@@ -45,6 +45,7 @@ __all__ = [
     "MAX_TICK",
     "MIN_TICK",
     "PARTS",
+    "PERCEPTION_SCALINGS",
     "TIME_UNITS",
     "Scenario",
 ]
@@ -59,6 +60,8 @@ MAX_TICK: Final = 3600.0
 """Longest tick in seconds."""
 _TIMING_FIELDS: Final = ("dock", "lift", "release", "pursuit_timeout", "cooldown")
 TIME_UNITS: Final = ("tick", "s")
+PERCEPTION_SCALINGS: Final = ("fixed", "arena")
+"""``Scenario.perception_scaling``: the camera keeps its range, or it grows with the arena."""
 PARTS: Final[tuple[tuple[str, type], ...]] = (
     ("arena", Arena),
     ("bodies", Bodies),
@@ -90,7 +93,9 @@ class Scenario:
     defaults to the lab arena scaled for ``carriers`` by the exponent
     ``arena_scaling`` (see the module docs).
     ``perception`` is ``"disc"`` (one ``detection_radius``) or ``"split"``
-    (``radio`` and ``camera``, SPEC §4.2a); ``time_unit`` is the unit of the
+    (``radio`` and ``camera``, SPEC §4.2a); ``perception_scaling`` whether
+    the camera's range grows with the arena (``perception_factor``);
+    ``time_unit`` is the unit of the
     event logs' times (``"tick"``, or ``"s"``: ticks times ``tick``).
     The field defaults are the base model (the simulator before profiles);
     ``Scenario.default`` starts from a profile (``swarmtag.sim.config.profiles``).
@@ -112,6 +117,7 @@ class Scenario:
     perception: str = "disc"
     time_unit: str = "tick"
     arena_scaling: float = 0.5
+    perception_scaling: str = "fixed"
     arena: Arena | None = None
     bodies: Bodies = field(default_factory=Bodies)
     motion: Motion = field(default_factory=Motion)
@@ -141,6 +147,8 @@ class Scenario:
         object.__setattr__(self, "time_unit", check_choice("time_unit", self.time_unit, TIME_UNITS))
         scaling = check_number("arena_scaling", self.arena_scaling, low=0.0, high=1.0)
         object.__setattr__(self, "arena_scaling", scaling)
+        grows = check_choice("perception_scaling", self.perception_scaling, PERCEPTION_SCALINGS)
+        object.__setattr__(self, "perception_scaling", grows)
         if self.arena is None:
             object.__setattr__(self, "arena", Arena.scaled(carriers, scaling))
         for name, kind in PARTS:
@@ -155,6 +163,9 @@ class Scenario:
                 msg = f"reprioritisations: {event!r} is not a Reprioritisation"
                 raise ConfigError(msg)
         object.__setattr__(self, "reprioritisations", events)
+        if self.perception_scaling == "arena" and self.warehouse is not None:
+            msg = "perception_scaling: 'arena' scales the camera with the lab arena, not a floor"
+            raise ConfigError(msg)
         if self.radio.search and perception != "split":
             msg = "radio.search: BLE-led search needs perception = 'split' (radio and camera apart)"
             raise ConfigError(msg)
@@ -248,10 +259,30 @@ class Scenario:
             if radio.search
             else ""
         )
-        return (
-            f"camera {camera.range:g} m (occlusion {camera.occlusion}, memory {camera.memory:g} s),"
-            f" radio {radio.range:g} m every {radio.interval:g} s{search}"
+        grown = (
+            f" x {self.perception_factor:.3g} = {camera.range * self.perception_factor:.3g} m"
+            if self.perception_scaling == "arena"
+            else ""
         )
+        return (
+            f"camera {camera.range:g} m{grown} (occlusion {camera.occlusion}, memory"
+            f" {camera.memory:g} s), radio {radio.range:g} m every {radio.interval:g} s{search}"
+        )
+
+    @property
+    def perception_factor(self) -> float:
+        """The camera's range and fade are multiplied by this: 1, or arena side over the lab's.
+
+        With ``perception_scaling = "arena"`` the camera sees as far relative
+        to its arena as in the 3.75 m lab (a different robot in every arena);
+        ``"fixed"`` keeps a camera's range, as a real camera does.
+
+        >>> Scenario(carriers=28, perception_scaling="arena").perception_factor
+        2.0
+        """
+        if self.perception_scaling == "fixed":
+            return 1.0
+        return self.area.size / Arena().size
 
     @property
     def area(self) -> Arena:

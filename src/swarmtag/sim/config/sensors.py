@@ -120,7 +120,9 @@ class Camera:
     (docs/perception.md). ``occlusion`` says what blocks the line of sight
     between the centres (``"none"``, other ``"carriers"``' footprints, or
     ``"carriers+robots"``); ``memory`` (s) is how long a robot remembers
-    where it last saw a carrier (0: only what it sees now).
+    where it last saw a carrier (0: only what it sees now). With
+    ``Scenario.perception_scaling = "arena"`` the kernel multiplies range
+    and fade by ``Scenario.perception_factor``.
     """
 
     range: float = param(
@@ -130,7 +132,6 @@ class Camera:
         low=0.0,
         low_open=True,
         high=MAX_LENGTH,
-        kernel=Kernel("camera_range"),
     )
     occlusion: str = param(
         "none",
@@ -153,7 +154,6 @@ class Camera:
         doc="Width of the detection ramp centred on range (0: a hard disc).",
         low=0.0,
         high=MAX_LENGTH,
-        kernel=Kernel("camera_fade"),
     )
 
     def __post_init__(self) -> None:

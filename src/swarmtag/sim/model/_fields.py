@@ -39,6 +39,10 @@ class ParamFields:
     """Sine of the largest turn in one tick."""
     split: bool
     """Split perception (radio and camera apart, SPEC §4.2a) rather than one disc."""
+    camera_range: float
+    """The camera's range (its 50 % distance with a fade), times the perception factor. [m]"""
+    camera_fade: float
+    """Width of the camera's detection ramp (0: a hard disc), times the perception factor. [m]"""
     detection_radius: float
     """Disc perception: the detection radius; split: the camera range (as far as robots see).
     [m]
@@ -97,16 +101,12 @@ class ParamFields:
     """Weight of a new RSSI distance in a robot's running estimate (1: latest only).
     (``radio.smoothing``)
     """
-    camera_range: float
-    """Robot centre to carrier centre within which a marker is read. (``camera.range``)"""
     occlusion: int
     """What blocks the camera's line of sight. (``camera.occlusion``) [index]"""
     memory_ticks: int
     """How long a robot remembers where it saw a carrier (0: not at all). (``camera.memory``)
     [ticks]
     """
-    camera_fade: float
-    """Width of the detection ramp centred on range (0: a hard disc). (``camera.fade``)"""
     dock_ticks: int
     """Centring under the carrier. (``timing.dock``) [ticks]"""
     lift_ticks: int

@@ -198,11 +198,27 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
         lambda s: s.perception == "split",
     ),
     KernelParameter(
+        "camera_range",
+        float,
+        "m",
+        "The camera's range (its 50 % distance with a fade), times the perception factor.",
+        lambda s: s.camera.range * s.perception_factor,
+    ),
+    KernelParameter(
+        "camera_fade",
+        float,
+        "m",
+        "Width of the camera's detection ramp (0: a hard disc), times the perception factor.",
+        lambda s: s.camera.fade * s.perception_factor,
+    ),
+    KernelParameter(
         "detection_radius",
         float,
         "m",
         "Disc perception: the detection radius; split: the camera range (as far as robots see).",
-        lambda s: s.camera.range if s.perception == "split" else s.detection_radius,
+        lambda s: s.camera.range * s.perception_factor
+        if s.perception == "split"
+        else s.detection_radius,
         controller=True,
     ),
     KernelParameter(
@@ -210,7 +226,7 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
         float,
         "m",
         "Beyond this no carrier is seen: the camera range plus half its fade.",
-        lambda s: s.camera.range + s.camera.fade / 2,
+        lambda s: (s.camera.range + s.camera.fade / 2) * s.perception_factor,
     ),
     KernelParameter(
         "rssi_sigma",
