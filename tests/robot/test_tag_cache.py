@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from swarmtag.errors import ConfigError
-from swarmtag.robot import TagCache, TagStates, tag_states
+from swarmtag.robot import Ranging, TagCache, TagStates, tag_states
 from swarmtag.tag import TagState, TagStatus
 from swarmtag.tag.backends import Sighting
 from swarmtag.tag.backends.fake import FakeScanner
@@ -142,3 +142,28 @@ def test_the_behaviour_tree_selects_from_what_the_scanner_heard():
         bot.close()
     assert io.target == 1
     assert io.reports[0] == (Report.SELECT, 1, 9.0)
+
+
+def test_a_ranging_cache_turns_each_new_sightings_rssi_into_a_running_distance():
+    awaiting = TagState(5, TagStatus.AWAITING_PICKUP, 1, 1)
+    ranging = Ranging(rssi_at_1m=-60.0, path_loss_exponent=2.0, smoothing=0.5)
+    cache = TagCache(carriers=3, tick=0.1, ranging=ranging)
+    cache.update([Sighting(1, awaiting, -80, 1.0, "AA")])  # 10 m
+    first = cache.states(1.0)
+    assert first.distance is not None
+    assert np.isnan(first.distance[[0, 2]]).all()  # never heard
+    assert first.distance[1] == pytest.approx(10.0)
+    cache.update([Sighting(1, awaiting, -66, 2.0, "AA")])  # 2 m: halfway from 10
+    assert cache.states(2.0).distance[1] == pytest.approx(6.0, rel=1e-3)
+    cache.update([Sighting(1, awaiting, -40, 1.5, "AA")])  # older than held: ignored
+    assert cache.states(2.0).distance[1] == pytest.approx(6.0, rel=1e-3)
+    assert TagCache(carriers=3, tick=0.1).states(2.0).distance is None  # not ranging
+
+
+def test_ranging_refuses_impossible_settings():
+    with pytest.raises(ConfigError, match="path_loss_exponent"):
+        Ranging(path_loss_exponent=0.5)
+    with pytest.raises(ConfigError, match="smoothing"):
+        Ranging(smoothing=0.0)
+    with pytest.raises(ConfigError, match="ranging"):
+        TagCache(carriers=3, tick=0.1, ranging="-60 dBm")

@@ -4,8 +4,8 @@
   (``swarmtag.robot.io``); the simulator offers one view per robot, a real
   robot its drivers (docs/controller.md);
 - ``ControllerConfig``: the mission rules and site geometry;
-- ``TagCache`` / ``tag_states``: a BLE scanner's sightings as the
-  ``tag_states`` sensor (``swarmtag.robot.tag_cache``);
+- ``TagCache`` / ``tag_states`` / ``Ranging``: a BLE scanner's sightings as the
+  ``tag_states`` sensor, ranged by RSSI for BLE-led search (``swarmtag.robot.tag_cache``);
 - ``create_tree`` and the subtree factories (py_trees, the ``robot``
   extra): SPEC §3.2 as a behaviour tree;
 - ``SimRobotIO``: one simulated robot through ``RobotIO`` (the simulator's view);
@@ -32,7 +32,7 @@ from swarmtag.robot.io import (
     RobotIO,
     TagStates,
 )
-from swarmtag.robot.tag_cache import TagCache, tag_states
+from swarmtag.robot.tag_cache import Ranging, TagCache, tag_states
 
 if TYPE_CHECKING:
     from swarmtag.robot.sil import TreeController, TreeFactory
@@ -48,6 +48,7 @@ __all__ = [
     "Divergence",
     "Pose",
     "RandomDraws",
+    "Ranging",
     "Report",
     "RobotIO",
     "SimRobotIO",

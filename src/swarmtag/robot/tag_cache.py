@@ -10,6 +10,11 @@ remembers, as the simulated robot's cache does (``known_status``,
 age grows, even after the scanner dropped it, until it is heard again. A
 controller that distrusts old states reads ``age``.
 
+With a ``Ranging`` (BLE-led search, docs/simulator.md) the cache also turns
+each new sighting's RSSI into a distance with the log-distance path-loss
+model and keeps a running estimate per carrier (``TagStates.distance``), as
+the simulated robot does.
+
 The age of a sighting heard at ``seen_at`` is ``floor((now - seen_at) /
 tick)`` ticks (0 in the tick it was heard, as in the simulator). Markers at
 or above ``carriers`` are not the site's carriers: they are left out (the
@@ -20,6 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -28,10 +34,42 @@ from swarmtag.errors import ConfigError
 from swarmtag.robot.io import TagStates
 from swarmtag.tag.backends.base import Scanner, Sighting
 
-__all__ = ["TagCache", "tag_states"]
+__all__ = ["Ranging", "TagCache", "tag_states"]
 
 _MAX_CARRIERS = 256
 """Marker ids are one byte: a site has at most 256 carriers with tags."""
+
+
+@dataclass(frozen=True)
+class Ranging:
+    """How a robot turns a tag's RSSI (dBm) into a distance (m): path loss, then smoothing.
+
+    ``rssi_at_1m`` is the site's tags' mean RSSI at 1 m (measure it: it
+    depends on the tag and the receiver; the default is the indoor mean of
+    Strzoda, Grochla and Polys, MSWiM 2022); ``path_loss_exponent`` and
+    ``smoothing`` as ``radio.path_loss_exponent`` and ``radio.smoothing``.
+
+    >>> Ranging().distance(-65.5), round(Ranging().distance(-85.5), 6)
+    (1.0, 10.0)
+    """
+
+    rssi_at_1m: float = -65.5
+    path_loss_exponent: float = 2.0
+    smoothing: float = 0.25
+
+    def __post_init__(self) -> None:
+        check_number("rssi_at_1m", self.rssi_at_1m, low=-150.0, high=20.0)
+        check_number("path_loss_exponent", self.path_loss_exponent, low=1.0, high=6.0)
+        check_number("smoothing", self.smoothing, low=0.0, low_open=True, high=1.0)
+
+    def distance(self, rssi: float) -> float:
+        """The distance an RSSI implies: ``10 ** ((rssi_at_1m - rssi) / (10 n))``."""
+        return float(10.0 ** ((self.rssi_at_1m - rssi) / (10.0 * self.path_loss_exponent)))
+
+    def update(self, estimate: float | None, rssi: float) -> float:
+        """A running estimate after one more sighting (the first one starts it)."""
+        sample = self.distance(rssi)
+        return sample if estimate is None else estimate + self.smoothing * (sample - estimate)
 
 
 def _checked(carriers: object, tick: object) -> tuple[int, float]:
@@ -93,9 +131,13 @@ class TagCache:
     [-1, -1, 1, -1]
     """
 
-    def __init__(self, *, carriers: int, tick: float) -> None:
+    def __init__(self, *, carriers: int, tick: float, ranging: Ranging | None = None) -> None:
         self.carriers, self.tick = _checked(carriers, tick)
+        if ranging is not None and not isinstance(ranging, Ranging):
+            raise ConfigError(f"ranging: expected a Ranging, got {type(ranging).__name__}")
+        self.ranging = ranging
         self._held: dict[int, Sighting] = {}
+        self._estimate: dict[int, float] = {}
         self._ignored: set[int] = set()
 
     @property
@@ -113,12 +155,21 @@ class TagCache:
             held = self._held.get(sighting.marker)
             if held is None or sighting.seen_at > held.seen_at:
                 self._held[sighting.marker] = sighting
+                if self.ranging is not None:
+                    previous = self._estimate.get(sighting.marker)
+                    self._estimate[sighting.marker] = self.ranging.update(previous, sighting.rssi)
                 kept += 1
         return kept
 
     def states(self, now: float) -> TagStates:
-        """The ``tag_states`` sensor at ``now`` (the scanner's clock)."""
-        return tag_states(self._held, carriers=self.carriers, now=now, tick=self.tick)
+        """The ``tag_states`` sensor at ``now`` (the scanner's clock), ranged with a ``Ranging``."""
+        found = tag_states(self._held, carriers=self.carriers, now=now, tick=self.tick)
+        if self.ranging is None:
+            return found
+        distance = np.full(self.carriers, np.nan)
+        for marker, estimate in self._estimate.items():
+            distance[marker] = estimate
+        return TagStates(found.status, found.urgency, found.age, distance=distance)
 
     def read(self, scanner: Scanner) -> TagStates:
         """Catch up with ``scanner`` (poll, take its sightings) and return the sensor now."""

@@ -216,9 +216,9 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
         float,
         "m",
         "Disc perception: the detection radius; split: the camera range (as far as robots see).",
-        lambda s: s.camera.range * s.perception_factor
-        if s.perception == "split"
-        else s.detection_radius,
+        lambda s: (
+            s.camera.range * s.perception_factor if s.perception == "split" else s.detection_radius
+        ),
         controller=True,
     ),
     KernelParameter(
