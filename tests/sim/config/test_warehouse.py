@@ -208,3 +208,14 @@ def test_trajectories_keep_the_floor_through_save_and_load(batch, tmp_path):
     assert loaded.geometry == geometry
     np.testing.assert_array_equal(loaded.robot_pos, traj.robot_pos)
     np.testing.assert_array_equal(loaded.carrier_present, traj.carrier_present)
+
+
+def test_a_warehouse_with_more_orders_than_marker_ids_round_trips():
+    from swarmtag.sim import load_profile
+
+    part = {"map": "warehouse-hall", "order_interval": 10.0}
+    hall = load_profile("lab").scenario({"robots": 36, "ticks": 36000, "warehouse": part})
+    assert hall.carriers > 256  # its orders, not marker ids
+    assert Scenario.from_mapping(hall.to_mapping()) == hall
+    with pytest.raises(ConfigError, match="carriers"):
+        Scenario(carriers=257)  # the lab arena's carriers are marker ids

@@ -133,7 +133,10 @@ class Scenario:
     def __post_init__(self) -> None:
         robots = check_int("robots", self.robots, low=1, high=MAX_ROBOTS)
         object.__setattr__(self, "robots", robots)
-        carriers = check_int("carriers", self.carriers, low=1, high=MAX_CARRIERS)
+        # a warehouse's carriers are its orders, allocated below from its part (a given count,
+        # e.g. from its own mapping, is replaced): only the lab arena's are marker ids
+        floor = self.warehouse is not None
+        carriers = check_int("carriers", self.carriers, low=1, high=None if floor else MAX_CARRIERS)
         object.__setattr__(self, "carriers", carriers)
         object.__setattr__(self, "ticks", check_int("ticks", self.ticks, low=1, high=MAX_TICKS))
         tick = check_number("tick", self.tick, low=MIN_TICK, high=MAX_TICK)
