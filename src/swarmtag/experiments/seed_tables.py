@@ -113,7 +113,9 @@ def robustness_section(
         paragraphs=[_seeds_note(seeds), _rules_note()],
         tables_html=[
             html_table(_CLAIM_HEADER, _claim_rows(summaries)),
-            html_table(_PART_HEADER, _part_rows(summaries)),
+            "<h3>Each part</h3>\n"
+            "<p>Every condition and swarm size of each direction, counted alike.</p>\n"
+            + html_table(_PART_HEADER, _part_rows(summaries)),
         ],
     )
 
