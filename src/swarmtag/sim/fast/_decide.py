@@ -235,34 +235,22 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     best_distance = 0.0
     best_known = False
     count = 0
-    if k.radio_search:
-        for c in range(k.carriers):
-            if not _open(r, n, c, t, w, k):
-                continue
-            count += 1
-            i = _seen_at(r, n, c, x)
-            distance = x.seen_distance[r, n, i] if i >= 0 else w.rssi[r, n, c]
-            urgency = float(known_urgency(r, n, c, w, k))
-            score = _score(k.policy_kind, k.policy_parameter, urgency, distance)
-            if _better(c, score, distance, best, best_score, best_distance):
-                best = c
-                best_score = score
-                best_distance = distance
-                best_known = i >= 0
-    else:
-        for i in range(x.seen_count[r, n]):
-            c = x.seen_list[r, n, i]
-            if not _open(r, n, c, t, w, k):
-                continue
-            count += 1
-            distance = x.seen_distance[r, n, i]
-            urgency = float(known_urgency(r, n, c, w, k))
-            score = _score(k.policy_kind, k.policy_parameter, urgency, distance)
-            if _better(c, score, distance, best, best_score, best_distance):
-                best = c
-                best_score = score
-                best_distance = distance
-                best_known = True
+    # with search every carrier may be a candidate, else only those known from the camera
+    total = k.carriers if k.radio_search else x.seen_count[r, n]
+    for j in range(total):
+        c = j if k.radio_search else x.seen_list[r, n, j]
+        i = _seen_at(r, n, c, x) if k.radio_search else j
+        if not _open(r, n, c, t, w, k):
+            continue
+        count += 1
+        distance = x.seen_distance[r, n, i] if i >= 0 else w.rssi[r, n, c]
+        urgency = float(known_urgency(r, n, c, w, k))
+        score = _score(k.policy_kind, k.policy_parameter, urgency, distance)
+        if _better(c, score, distance, best, best_score, best_distance):
+            best = c
+            best_score = score
+            best_distance = distance
+            best_known = i >= 0
     if best < 0:
         return
     emit(r, n, EventKind.SELECT, best, float(known_urgency(r, n, best, w, k)), x)
