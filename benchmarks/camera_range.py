@@ -28,6 +28,7 @@ from swarmtag.perception import (
     Conditions,
     Nuisance,
     Placement,
+    centring_offset,
     detect_markers,
     fuse,
     load_rig,
@@ -48,7 +49,11 @@ def simulator_ranges() -> dict[str, float]:
 
 
 def examples(rig, path: Path, seed: int) -> None:
-    """A 2 x 2 montage of image crops around the carrier: near, mid, far, and the upward view."""
+    """A 2 x 2 montage of image crops around the carrier: near, mid, far, and the upward view.
+
+    The upward view is shown whole, scaled to fit its tile; on a rig whose carriers carry
+    an underside map, its label says what ``centring_offset`` read from the map.
+    """
     import cv2  # noqa: PLC0415 - the vision extra, as the package imports it
 
     rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
@@ -66,7 +71,16 @@ def examples(rig, path: Path, seed: int) -> None:
     upward = next(camera for camera in rig.cameras if camera.upward)
     placement = Placement(7, 0.02, -0.01, 15.0)
     image = render(upward, rig.carrier, [placement], conditions, rng=rng)
-    tiles.append((image, None, "upward camera, carrier 2 cm ahead, 1 cm right"))
+    note = "upward camera, carrier 2 cm ahead, 1 cm right"
+    if rig.carrier.underside_map is not None:
+        read = centring_offset(detect_markers(image, upward, rig.carrier))
+        note = (  # the truth: (2.0, -1.0) cm, 15 deg
+            f"upward: {read.markers} map markers, ({read.offset[0] * 100:.1f}, "
+            f"{read.offset[1] * 100:.1f}) cm, {read.yaw:.1f} deg"
+            if read is not None
+            else "upward: map not read"
+        )
+    tiles.append((image, None, note))
     crops = []
     for image, placement, note in tiles:
         h, w = image.shape
@@ -76,8 +90,14 @@ def examples(rig, path: Path, seed: int) -> None:
             pixel = front.intrinsics.matrix @ centre
             cx = int(np.clip(pixel[0] / pixel[2], 240, w - 240))
         crop = image[max(cy - 135, 0) : cy + 135, cx - 240 : cx + 240].copy()
-        if placement is None:  # the upward view is large: show it whole, scaled
-            crop = cv2.resize(image, (480, 270), interpolation=cv2.INTER_AREA)
+        if placement is None:  # the upward view is large: show it whole, scaled to fit
+            scale = min(480 / w, 270 / h)
+            size = (round(w * scale), round(h * scale))
+            crop = np.zeros((270, 480), dtype=np.uint8)
+            left, top = (480 - size[0]) // 2, (270 - size[1]) // 2
+            crop[top : top + size[1], left : left + size[0]] = cv2.resize(
+                image, size, interpolation=cv2.INTER_AREA
+            )
         cv2.rectangle(crop, (0, 0), (crop.shape[1] - 1, 30), 0, thickness=-1)
         cv2.putText(crop, note, (8, 21), cv2.FONT_HERSHEY_SIMPLEX, 0.55, 255, 1, cv2.LINE_AA)
         crops.append(crop)

@@ -94,6 +94,41 @@ def test_the_upward_view_reports_the_centring_offset(capsys, tmp_path):
     assert "centring on 4: move (+3.0, +0.0) cm" in out
 
 
+def test_the_dots_upward_camera_centres_on_the_underside_map(capsys, tmp_path):
+    image = tmp_path / "map.png"
+    argv = ["aruco", "render", "--camera", "dots", "--view", "cam4", "--marker", "7"]
+    code, out, err = run(
+        capsys, *argv, "--distance", "0.04", "--bearing", "30", "--turn", "10", "--noise", "2",
+        "--out", str(image),
+    )  # fmt: skip
+    assert (code, err) == (0, "")
+    assert "(camera cam4, 640x480; marker 7 at 0.04 m, bearing 30 deg)" in out
+    code, out, _ = run(
+        capsys, "aruco", "detect", str(image), "--camera", "dots", "--view", "cam4", "--json"
+    )
+    assert code == 0
+    report = json.loads(out)
+    ids = [m["id"] for m in report["markers"]]
+    assert len(ids) >= 10
+    assert all(200 <= i <= 248 for i in ids)  # map markers, not carrier ids
+    assert all(len(m["map_offset"]) == 2 for m in report["markers"])
+    assert report["carriers"] == []  # a map marker names no carrier
+    centring = report["centring"]
+    assert centring["id"] == 200
+    assert centring["map_markers"] == len(ids)
+    # the carrier 4 cm away at 30 deg, its east face at 30 + 180 + 10 = 220 deg
+    assert centring["offset"] == pytest.approx([0.0346, 0.02], abs=0.001)
+    assert centring["yaw"] == pytest.approx(-140.0, abs=0.5)
+    code, out, _ = run(capsys, "aruco", "detect", str(image), "--camera", "dots", "--view", "cam4")
+    assert f"camera cam4: {len(ids)} marker(s), 0 carrier(s)" in out
+    assert f"centring on the underside map 200 ({len(ids)} markers): move (+3.5, +2.0) cm" in out
+    code, _, err = run(
+        capsys, *argv[:-1], "210", "--distance", "0", "--bearing", "0", "--out", str(image)
+    )
+    assert code == 2
+    assert "marker 210: one of the carriers' underside map ids (200-248)" in err
+
+
 def test_a_camera_file_is_read_and_a_photo_of_another_size_refused(capsys, tmp_path):
     small = tmp_path / "small.toml"
     text = rig_path("dots-like").read_text().replace("width = 1920", "width = 640")

@@ -26,6 +26,9 @@ def test_the_rig_is_the_robots_camera_as_its_public_code_gives_it():
     assert yaws == [-2.251, -0.297, 0.297, 2.251]
     assert RIG.carrier.marker_size == 0.04
     assert [c.name for c in RIG.cameras if c.upward] == ["cam4"]
+    # under the carrier, a 7 x 7 map of 23.4 mm markers, ids 200-248 (test_marker_map.py)
+    assert RIG.carrier.underside_map.ids == range(200, 249)
+    assert RIG.carrier.underside_map.marker_size == 0.0234
 
 
 def test_a_40_mm_side_marker_is_read_within_5_percent_at_0_8_m_and_not_reliably_at_2_5_m():

@@ -63,7 +63,7 @@ def aruco() -> None:
     "--marker",
     required=True,
     type=click.IntRange(0, 249),
-    help="Marker id 0-249 (the dictionary's ids).",
+    help="The carrier's marker id 0-249 (the dictionary's ids; not one of an underside map's).",
 )
 @click.option(
     "--distance",
@@ -204,7 +204,8 @@ def detect_cmd(
     """Find the markers in IMAGE, a photo from one camera of the camera file.
 
     Prints each carrier's id, distance, bearing and predock point; from the upward
-    camera, the centring offset.
+    camera, the centring offset (from every marker of the carriers' underside map in
+    view, where the camera file gives one: map markers name no carrier).
     """
     from swarmtag.perception import centring_offset, detect_markers, fuse  # noqa: PLC0415
 
@@ -215,23 +216,26 @@ def detect_cmd(
     found = detect_markers(_read_image(image), chosen, rig.carrier)
     carriers = fuse(found, rig.carrier, heading=heading)
     centring = centring_offset(found) if chosen.upward else None
+    markers = []
+    for d in found:
+        entry: dict[str, Any] = {
+            "id": d.marker,
+            "corners": _round(d.corners, 2),
+            "distance": round(d.distance, 4),
+            "bearing": round(d.bearing, 2),
+            "position": _round(d.position),
+            "normal": _round(d.normal),
+            "camera_distance": round(d.camera_distance, 4),
+            "side_pixels": round(d.side_pixels, 2),
+            "reprojection_error": round(d.reprojection_error, 3),
+        }
+        if d.map_offset is not None:  # only on a map: old camera files print what they did
+            entry["map_offset"] = _round(d.map_offset)
+        markers.append(entry)
     report = {
         "image": str(image),
         "camera": chosen.name,
-        "markers": [
-            {
-                "id": d.marker,
-                "corners": _round(d.corners, 2),
-                "distance": round(d.distance, 4),
-                "bearing": round(d.bearing, 2),
-                "position": _round(d.position),
-                "normal": _round(d.normal),
-                "camera_distance": round(d.camera_distance, 4),
-                "side_pixels": round(d.side_pixels, 2),
-                "reprojection_error": round(d.reprojection_error, 3),
-            }
-            for d in found
-        ],
+        "markers": markers,
         "carriers": [],
         "centring": None,
     }
@@ -257,6 +261,8 @@ def detect_cmd(
             "yaw": round(centring.yaw, 2),
             "centred": centring.centred(),
         }
+        if any(d.in_map for d in found):
+            report["centring"]["map_markers"] = centring.markers
     if as_json:
         click.echo(json.dumps(report))
         return
@@ -278,8 +284,11 @@ def _print_report(report: dict[str, Any], camera: str) -> None:
     if centring is not None:
         dx, dy = centring["offset"]
         state = "centred" if centring["centred"] else "not centred"
+        what = centring["id"]
+        if "map_markers" in centring:
+            what = f"the underside map {what} ({centring['map_markers']} markers)"
         click.echo(
-            f"centring on {centring['id']}: move ({dx * 100:+.1f}, {dy * 100:+.1f}) cm, "
+            f"centring on {what}: move ({dx * 100:+.1f}, {dy * 100:+.1f}) cm, "
             f"turn {centring['yaw']:.1f}°: {state}"
         )
     if not markers:

@@ -1,7 +1,9 @@
 """The robot's cameras (SPEC §3.1, §3.2, §7): ArUco markers, carrier poses, centring, range.
 
 Carriers carry 50 mm ``ARUCO_MIP_36h12`` markers on their four faces and their
-underside, all with the carrier's own marker id (docs/perception.md). This
+underside, all with the carrier's own marker id, or, like the DOTS carriers, a
+map of small markers on the underside (ids 200-248, the same on every carrier;
+docs/perception.md). This
 package finds them in camera images with OpenCV (the ``vision`` extra, imported
 on first use) and turns them into what the controller needs::
 
@@ -14,9 +16,10 @@ on first use) and turns them into what the controller needs::
         carrier.distance, carrier.bearing, carrier.predock(rig.carrier)
 
 - ``camera``: the typed camera model (intrinsics, distortion, mount) and rig files;
+- ``marker_map``: an underside marker map (``UndersideMap``: grid, marker size, pitch, ids);
 - ``markers``: detection and pose (``detect_markers``, ``MarkerDetection``);
 - ``fusion``: one position per carrier, its predock point, the upward camera's
-  centring offset (``fuse``, ``centring_offset``);
+  centring offset from the underside marker or map (``fuse``, ``centring_offset``);
 - ``synth``: synthetic camera images at known poses (``render``);
 - ``range_study``: detection rate and distance error against distance and bearing.
 """
@@ -47,6 +50,7 @@ from swarmtag.perception.fusion import (
     centring_offset,
     fuse,
 )
+from swarmtag.perception.marker_map import UndersideMap
 from swarmtag.perception.markers import (
     DICTIONARY,
     MARKER_IDS,
@@ -93,6 +97,7 @@ __all__ = [
     "Predock",
     "RangeStudy",
     "Rig",
+    "UndersideMap",
     "centring_offset",
     "detect_markers",
     "fuse",

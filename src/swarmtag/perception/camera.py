@@ -38,6 +38,7 @@ from swarmtag._checks import check_choice, check_int, check_number, show
 from swarmtag._inputs import is_regular_file
 from swarmtag._toml import read_toml
 from swarmtag.errors import PerceptionError
+from swarmtag.perception.marker_map import UndersideMap
 
 __all__ = [
     "CAMERA_KINDS",
@@ -240,13 +241,17 @@ class CarrierMarkers:
     the side of each marker's black square (SPEC: 50 mm). One marker is centred
     on each of the four faces with its centre ``marker_height`` above the floor,
     facing out; one is centred on the underside, ``underside_height`` above the
-    floor, facing down. All five carry the carrier's own marker id.
+    floor, facing down. All five carry the carrier's own marker id, unless
+    ``underside_map`` is given: then the underside carries that grid of markers
+    (``marker_map``; the DOTS carriers' 7 x 7 map, ids 200-248) instead of the
+    fifth marker, the same on every carrier.
     """
 
     side: float = 0.355
     marker_size: float = 0.05
     marker_height: float = 0.10
     underside_height: float = 0.20
+    underside_map: UndersideMap | None = None
 
     def __post_init__(self) -> None:
         side = _number("carrier.side", self.side, low=0.0, low_open=True, high=MAX_LENGTH)
@@ -266,11 +271,29 @@ class CarrierMarkers:
             ("underside_height", underside),
         ):
             object.__setattr__(self, name, value)
+        grid: object = self.underside_map  # checked at run time: rig files are user input
+        if grid is not None and not isinstance(grid, UndersideMap):
+            msg = f"carrier.underside_map: {show(grid)} is not an UndersideMap"
+            raise PerceptionError(msg)
+        if self.underside_map is not None and self.underside_map.extent > side:
+            msg = f"carrier.underside_map: {self.underside_map.extent:g} m across, wider than "
+            msg += f"the carrier ({side:g} m; columns, rows and pitch set its size)"
+            raise PerceptionError(msg)
 
     @property
     def half(self) -> float:
         """Half the carrier's side: from its centre to a face (m)."""
         return self.side / 2
+
+    def in_map(self, marker: int) -> bool:
+        """Whether ``marker`` is one of the underside map's ids (never, without a map)."""
+        return self.underside_map is not None and self.underside_map.holds(marker)
+
+    def size_of(self, marker: int) -> float:
+        """The black square's side (m) of marker ``marker``: a map marker's, or ``marker_size``."""
+        if self.underside_map is not None and self.underside_map.holds(marker):
+            return self.underside_map.marker_size
+        return self.marker_size
 
 
 @dataclass(frozen=True, slots=True)
@@ -323,7 +346,8 @@ class Rig:
 _TOP: Final = ("name", "description", "intrinsics", "carrier", "cameras")
 _INTRINSICS: Final = ("width", "height", "fx", "fy", "cx", "cy", "horizontal_fov", "distortion")
 _CAMERA: Final = ("name", "kind", "position", "yaw", "pitch", "intrinsics")
-_CARRIER: Final = ("side", "marker_size", "marker_height", "underside_height")
+_CARRIER: Final = ("side", "marker_size", "marker_height", "underside_height", "underside_map")
+_MAP: Final = ("columns", "rows", "marker_size", "pitch", "first_id")
 
 
 def _table(value: object, where: str) -> Mapping[str, Any]:
@@ -425,8 +449,16 @@ def rig_from_mapping(data: Mapping[str, Any], *, source: str | None = None) -> R
         shared = None
         if "intrinsics" in data:
             shared = _intrinsics(_table(data["intrinsics"], "intrinsics"), "intrinsics")
-        carrier_table = _table(data.get("carrier", {}), "carrier")
+        carrier_table = dict(_table(data.get("carrier", {}), "carrier"))
         _known(carrier_table, _CARRIER, "carrier")
+        if "underside_map" in carrier_table:
+            where = "carrier.underside_map"
+            map_table = _table(carrier_table["underside_map"], where)
+            _known(map_table, _MAP, where)
+            try:
+                carrier_table["underside_map"] = UndersideMap(**map_table)
+            except PerceptionError as error:
+                raise PerceptionError(f"carrier.{error}") from None
         carrier = CarrierMarkers(**carrier_table)
         cameras = data.get("cameras")
         if not isinstance(cameras, list) or not cameras:

@@ -24,6 +24,16 @@ at ``predock_distance`` from that face (the simulator's rule, SPEC §3.2 and
 §4.1), with the heading that faces the carrier. ``centring_offset`` reads the
 upward camera's view of the underside marker: how far the carrier's centre is
 from the robot's, and how it is turned, so the robot can centre under it.
+
+A carrier with an underside map (``marker_map``; the DOTS carriers') shows the
+upward camera many small markers, each at a known place on the map, and names
+no carrier with them (every carrier carries the same map): ``fuse`` leaves map
+markers out, and ``centring_offset`` combines every one in view the way ``fuse``
+combines a carrier's markers: the map's turn is the weighted circular mean of
+the markers' x axes, each marker then puts the map's centre its known offset
+away along that turn, and the centres are averaged with weights
+``side_pixels ** 4``. Any part of the map will do; more markers average more
+corner noise away (docs/perception.md gives the accuracy).
 """
 
 from __future__ import annotations
@@ -143,7 +153,8 @@ def fuse(
     """One estimate per marker id among ``detections`` (any cameras), sorted by id.
 
     ``heading`` (deg, world frame), where the robot knows it, lets the faces be
-    taken on the world's axes.
+    taken on the world's axes. Markers of an underside map are left out: they name
+    no carrier (``centring_offset`` reads them).
     """
     if heading is not None:
         heading = check_number("heading", heading, low=-1e4, high=1e4, error=PerceptionError)
@@ -153,7 +164,8 @@ def fuse(
         if not isinstance(detection, MarkerDetection):
             msg = f"fuse: expected MarkerDetection items, got {type(detection).__name__}"
             raise PerceptionError(msg)
-        groups.setdefault(detection.marker, []).append(detection)
+        if not detection.in_map:
+            groups.setdefault(detection.marker, []).append(detection)
     return tuple(_fuse_one(marker, groups[marker], carrier, heading) for marker in sorted(groups))
 
 
@@ -214,16 +226,19 @@ def _fuse_one(
 class CentringOffset:
     """What the upward camera says about the carrier above the robot.
 
-    ``marker``: its id; ``offset`` (2,): the carrier's centre minus the robot's (m,
+    ``marker``: its id (from an underside map: the map's first id, as the DOTS
+    robot reports it); ``offset`` (2,): the carrier's centre minus the robot's (m,
     robot frame: the move that centres the robot); ``yaw``: the carrier's east face
     direction relative to the robot's forward axis (deg); ``height``: the underside
-    marker's height above the floor (m).
+    marker's height above the floor (m); ``markers``: how many markers it comes
+    from (one underside marker, or the map markers in view).
     """
 
     marker: int
     offset: Float
     yaw: float
     height: float
+    markers: int = 1
 
     @property
     def error(self) -> float:
@@ -241,9 +256,10 @@ def centring_offset(
 ) -> CentringOffset | None:
     """The centring offset from the upward camera's detections (None if it sees no marker).
 
-    ``marker`` picks the carrier being docked; without it the largest marker in view
-    is used. Detections from other cameras are refused: only the upward camera looks
-    at an underside.
+    ``marker`` picks the carrier being docked (or an underside map, by its first
+    id); without it the map's markers in view are combined (module docstring) or,
+    on carriers without a map, the largest marker in view is used. Detections from
+    other cameras are refused: only the upward camera looks at an underside.
     """
     chosen = []
     for item in detections:
@@ -254,11 +270,27 @@ def centring_offset(
         if not detection.upward:
             msg = f"centring_offset: camera {detection.camera!r} is not the upward camera"
             raise PerceptionError(msg)
-        if marker is None or detection.marker == marker:
+        if marker is None or marker in (detection.marker, detection.map_id):
             chosen.append(detection)
     if not chosen:
         return None
+    mapped = [d for d in chosen if d.in_map]
+    if mapped:
+        return _map_alignment(mapped)
     best = max(chosen, key=lambda d: d.side_pixels)
     offset = best.position[:2].round(12) + 0.0
     height = float(best.position[2])
     return CentringOffset(best.marker, offset, _wrap(best.face_direction()), height)
+
+
+def _map_alignment(group: list[MarkerDetection]) -> CentringOffset:
+    """The carrier's centre and turn from the map markers in view (module docstring)."""
+    weights = np.array([d.side_pixels for d in group]) ** 4
+    weights = weights / weights.sum()
+    angles = np.radians([d.face_direction() for d in group])
+    yaw = math.degrees(math.atan2(float(weights @ np.sin(angles)), float(weights @ np.cos(angles))))
+    centre = weights @ np.array([d.map_centre(yaw) for d in group])
+    first = group[0].map_id
+    assert first is not None  # only map markers are grouped here
+    offset = centre[:2].round(12) + 0.0
+    return CentringOffset(first, offset, _wrap(yaw), float(centre[2]), len(group))

@@ -19,6 +19,12 @@ the detector and the synthetic renderer (``synth``) use: a face marker's x axis
 runs along the face (to the right, seen from outside), its y axis up, its z
 axis out of the face; the underside marker's x axis points to the carrier's
 east face and its z axis down.
+
+A carrier with an underside map (``marker_map``; the DOTS carriers') carries a
+grid of smaller markers there instead of the fifth marker: ``detect_markers``
+takes each map id's pose with the map's marker size and marks the detection
+with the map (``map_id``) and the marker's place on it (``map_offset``), so the
+carrier's centre can be found from any part of the map (``fusion``).
 """
 
 from __future__ import annotations
@@ -101,6 +107,14 @@ class MarkerFrame:
         signs = np.array([[-1.0, 1.0], [1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]]) * half
         return self.centre + signs[:, :1] * self.x + signs[:, 1:] * self.y
 
+    def shifted(self, offset: Float) -> MarkerFrame:
+        """This frame moved in its own plane by ``offset`` (2,) along ``x`` and ``y`` (m).
+
+        A map marker's frame: the underside frame moved to the marker's place on the map.
+        """
+        shift = float(offset[0]) * self.x + float(offset[1]) * self.y
+        return MarkerFrame(self.face, self.centre + shift, self.x, self.y, self.z)
+
 
 def marker_frames(carrier: CarrierMarkers) -> tuple[MarkerFrame, ...]:
     """The carrier's five markers: one per face (east, north, west, south), then the underside.
@@ -140,6 +154,12 @@ class MarkerDetection:
     ``reprojection_error``: RMS of the kept pose (px); ``alternatives``: the
     normals (3,) of the other poses that reproject about as well (a square's
     pose is ambiguous from afar), which ``fuse`` may pick instead.
+
+    A marker of the carrier's underside map also has ``map_id``, the map's first id
+    (the id the DOTS robot's vision node reports for the whole map: 200), and
+    ``map_offset`` (2,), its centre in the map's frame (m; ``marker_map``); both are
+    None for any other marker. A map marker names no carrier (every carrier carries
+    the same map): ``fuse`` leaves it out and ``centring_offset`` reads it.
     """
 
     marker: int
@@ -152,6 +172,13 @@ class MarkerDetection:
     camera_distance: float
     reprojection_error: float
     alternatives: tuple[Float, ...] = ()
+    map_id: int | None = None
+    map_offset: Float | None = None
+
+    @property
+    def in_map(self) -> bool:
+        """Whether this is a marker of the carrier's underside map (it names no carrier)."""
+        return self.map_id is not None
 
     @property
     def distance(self) -> float:
@@ -191,8 +218,13 @@ class MarkerDetection:
     def carrier_centre(self, carrier: CarrierMarkers, direction: float | None = None) -> Float:
         """The carrier's centre (2,) this marker implies: behind a face marker by half a side.
 
-        ``direction`` (deg, robot frame) replaces the measured face normal's direction.
+        ``direction`` (deg, robot frame) replaces the measured face normal's direction
+        (a map marker's: the carrier's east face direction, which places the marker on
+        the map). An underside marker is under the centre; a map marker is its
+        ``map_offset`` away from it.
         """
+        if self.map_offset is not None:
+            return self.map_centre(direction)[:2]
         if self.underside:
             return self.position[:2].copy()
         if direction is None:
@@ -201,6 +233,25 @@ class MarkerDetection:
             angle = math.radians(direction)
             normal = np.array([math.cos(angle), math.sin(angle)])
         return self.position[:2] - normal * carrier.half
+
+    def map_centre(self, direction: float | None = None) -> Float:
+        """The underside map's centre (3,) this map marker implies: the carrier's centre above.
+
+        The map's frame is placed by the marker's own axis or, given ``direction``
+        (deg, robot frame), by that east face direction on a level underside.
+        """
+        if self.map_offset is None:
+            msg = f"marker {self.marker} is not a map marker"
+            raise PerceptionError(msg)
+        x_axis, normal = self.axis, self.normal
+        if direction is not None:
+            angle = math.radians(direction)
+            x_axis = np.array([math.cos(angle), math.sin(angle), 0.0])
+            normal = np.array([0.0, 0.0, -1.0])
+        y_axis = np.cross(normal, x_axis)
+        shift = float(self.map_offset[0]) * x_axis + float(self.map_offset[1]) * y_axis
+        centre: Float = self.position - shift
+        return centre
 
     def face(self, heading: float) -> Face:
         """The face this marker is on, for a robot whose heading is ``heading`` deg (world frame).
@@ -380,7 +431,9 @@ def detect_markers(
 ) -> tuple[MarkerDetection, ...]:
     """Every marker of the dictionary found in ``image`` taken by ``camera``, sorted by id.
 
-    ``carrier`` gives the markers' size (pose) and where they hang. Left out: a marker
+    ``carrier`` gives the markers' size (pose) and where they hang; an id of its
+    underside map (if it has one) is a map marker, posed with the map's marker size
+    and marked with its place on the map. Left out: a marker
     with a corner within ``BORDER_PIXELS`` of the image's edge (it may be cut off), one
     with no possible pose (see ``_pose``), and one found only by the second read whose
     corners do not fit a square (``SECOND_READ_RMS``). Raises ``PerceptionError`` for an
@@ -390,11 +443,12 @@ def detect_markers(
     opencv()  # refuses in one line when the extra is missing (the detector may be cached)
     gray = to_gray(image, camera)
     mount = camera.mount
+    grid = carrier.underside_map
     found = []
     for marker, image_points, second in _found(gray):
         if not _inside(image_points, gray):
             continue
-        pose = _pose(image_points, camera, carrier.marker_size)
+        pose = _pose(image_points, camera, carrier.size_of(marker))
         if pose is None:
             continue
         rotation, translation, error, others = pose
@@ -412,6 +466,8 @@ def detect_markers(
                 camera_distance=float(np.linalg.norm(translation)),
                 reprojection_error=error,
                 alternatives=others,
+                map_id=grid.first_id if grid is not None and grid.holds(marker) else None,
+                map_offset=grid.offset(marker) if grid is not None and grid.holds(marker) else None,
             )
         )
     return tuple(sorted(found, key=lambda d: (d.marker, d.corners[0, 0], d.corners[0, 1])))

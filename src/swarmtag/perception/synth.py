@@ -3,7 +3,8 @@
 ``render`` draws what one of the robot's cameras sees of carriers placed in the
 robot frame (``Placement``): each face as a grey panel with a white label and
 its ``cv2.aruco.generateImageMarker`` marker, the underside as a board with
-its marker, over a uniform floor. Every face is a plane drawn through its
+its marker (or, on a carrier with an underside map, with the map's grid of
+markers on white paper), over a uniform floor. Every face is a plane drawn through its
 exact homography (no approximation), with 2-4x supersampling and area
 averaging so that edges are anti-aliased as a sensor integrates them; faces
 turned away are culled and nearer faces painted over farther ones; parts
@@ -151,14 +152,21 @@ def _marker_image(marker: int) -> NDArray[np.float32]:
 
 @dataclass(frozen=True, eq=False)
 class _Texture:
-    """A face's picture: reflectances (rows, cols) and the size of one texel (m)."""
+    """A face's picture: reflectances (rows, cols), the size of one texel (m), its markers.
+
+    ``squares``: the top and left texel of each marker's black square (empty: one
+    marker, at the centre).
+    """
 
     image: NDArray[np.float32]
     texel: float
+    squares: tuple[tuple[int, int], ...] = ()
 
 
 def _texture(marker: int, frame: MarkerFrame, carrier: CarrierMarkers) -> _Texture:
     """The face panel (or underside board) with the white-labelled marker at its centre."""
+    if frame.face is Face.UNDERSIDE and carrier.underside_map is not None:
+        return _map_texture(carrier)
     core = _marker_image(marker)
     side = core.shape[0]
     texel = carrier.marker_size / side
@@ -180,18 +188,52 @@ def _texture(marker: int, frame: MarkerFrame, carrier: CarrierMarkers) -> _Textu
     return _Texture(image, texel)
 
 
+@functools.cache
+def _map_texture(carrier: CarrierMarkers) -> _Texture:
+    """The underside board with the carrier's marker map on white paper, centred.
+
+    The texel is the map marker's module over ``TEXELS_PER_MODULE``; each marker's
+    place is rounded to the nearest texel (exact when the pitch is a whole number of
+    texels, as on the DOTS map: 96). The paper reaches one module past the outer
+    markers. Cached (read-only) per carrier: it is the same on every carrier.
+    """
+    grid = carrier.underside_map
+    if grid is None:  # pragma: no cover - only called for a carrier with a map
+        msg = "the carrier has no underside map"
+        raise PerceptionError(msg)
+    side = _marker_image(0).shape[0]
+    texel = grid.marker_size / side
+    size = side + 2 * max(round((carrier.side - grid.marker_size) / 2 / texel), 0)
+    image = np.full((size, size), SHADES["board"], dtype=np.float32)
+    squares = []
+    for marker in grid.ids:
+        u, v = grid.offset(marker) / texel  # texture rows run down, against the map's y
+        squares.append((round((size - side) / 2 - v), round((size - side) / 2 + u)))
+    tops, lefts = [top for top, _ in squares], [left for _, left in squares]
+    quiet = TEXELS_PER_MODULE
+    paper = (
+        slice(max(min(tops) - quiet, 0), max(tops) + side + quiet),
+        slice(max(min(lefts) - quiet, 0), max(lefts) + side + quiet),
+    )
+    image[paper] = SHADES["label"]
+    for marker, (top, left) in zip(grid.ids, squares, strict=True):
+        image[top : top + side, left : left + side] = _marker_image(marker)
+    image.flags.writeable = False
+    return _Texture(image, texel, tuple(squares))
+
+
 def _occlude(texture: _Texture, fraction: float, rng: np.random.Generator) -> None:
-    """Hide ``fraction`` of the marker's width behind a dark bar, at its left or right edge."""
+    """Hide ``fraction`` of each marker's width behind a dark bar, at its left or right edge."""
     image = texture.image
     side = _marker_image(0).shape[0]
     rows, cols = image.shape
-    top, left = (rows - side) // 2, (cols - side) // 2
     width = round(fraction * side)
     if width == 0:
         return
-    start = left if rng.integers(2) == 0 else left + side - width
-    bottom = min(top + side + TEXELS_PER_MODULE, rows)
-    image[max(top - TEXELS_PER_MODULE, 0) : bottom, start : start + width] = SHADES["occluder"]
+    for top, left in texture.squares or (((rows - side) // 2, (cols - side) // 2),):
+        start = left if rng.integers(2) == 0 else left + side - width
+        bottom = min(top + side + TEXELS_PER_MODULE, rows)
+        image[max(top - TEXELS_PER_MODULE, 0) : bottom, start : start + width] = SHADES["occluder"]
 
 
 # --- drawing one plane ---------------------------------------------------------------------------
@@ -344,25 +386,39 @@ def visible_markers(
     """The (marker id, face) pairs whose whole black square lies in the image, facing the camera.
 
     Nearer carriers are not tested as occluders: this is what the camera could see.
+    An underside map counts as seen (under the carrier's id) when one of its markers is.
     """
+    _check_ids(carrier, placements)
     cv2 = opencv()
     lens = camera.intrinsics
+    limit = np.array([lens.width, lens.height]) - 0.5 - margin
     seen = []
     for _, placement, frame, _pose in _faces(camera, carrier, placements):
-        corners = camera.mount.to_camera(placement.to_robot(frame.corners(carrier.marker_size)))
-        if np.any(corners[:, 2] < NEAR):
-            continue
-        pixels, _ = cv2.projectPoints(
-            corners, np.zeros(3), np.zeros(3), lens.matrix, lens.coefficients
-        )
-        pixels = pixels.reshape(-1, 2)
-        inside = np.all(
-            (pixels >= margin - 0.5)
-            & (pixels <= np.array([lens.width, lens.height]) - 0.5 - margin)
-        )
-        if inside:
-            seen.append((placement.marker, frame.face))
+        squares = [(frame, carrier.marker_size)]
+        if frame.face is Face.UNDERSIDE and carrier.underside_map is not None:
+            grid = carrier.underside_map
+            squares = [(frame.shifted(grid.offset(m)), grid.marker_size) for m in grid.ids]
+        for square, size in squares:
+            corners = camera.mount.to_camera(placement.to_robot(square.corners(size)))
+            if np.any(corners[:, 2] < NEAR):
+                continue
+            pixels, _ = cv2.projectPoints(
+                corners, np.zeros(3), np.zeros(3), lens.matrix, lens.coefficients
+            )
+            pixels = pixels.reshape(-1, 2)
+            if np.all((pixels >= margin - 0.5) & (pixels <= limit)):
+                seen.append((placement.marker, frame.face))
+                break
     return tuple(seen)
+
+
+def _check_ids(carrier: CarrierMarkers, placements: Sequence[Placement]) -> None:
+    """Refuse a carrier whose own id is one of the underside map's: it would read as the map."""
+    for placement in placements:
+        if carrier.underside_map is not None and carrier.in_map(placement.marker):
+            msg = f"marker {placement.marker}: one of the carriers' underside map ids "
+            msg += f"({carrier.underside_map.describe()}); give the carrier an id outside them"
+            raise PerceptionError(msg)
 
 
 def render(
@@ -382,6 +438,7 @@ def render(
     if not isinstance(source, np.random.Generator):
         msg = f"rng: expected a numpy.random.Generator, got {type(source).__name__}"
         raise PerceptionError(msg)
+    _check_ids(carrier, placements)
     lens = camera.intrinsics
     if lens.distorted:
         map_x, map_y, left, top, width, height = _lens_maps(lens)
@@ -394,7 +451,7 @@ def render(
     for _, placement, frame, pose in _faces(camera, carrier, placements):
         texture = _texture(placement.marker, frame, carrier)
         if conditions.occlusion > 0:
-            texture = _Texture(texture.image.copy(), texture.texel)
+            texture = _Texture(texture.image.copy(), texture.texel, texture.squares)
             _occlude(texture, conditions.occlusion, rng)
         _draw(canvas, matrix, texture, pose)
     image: Any = canvas
