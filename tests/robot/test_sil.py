@@ -80,6 +80,10 @@ def test_large_swarm_event_logs_are_identical(realism):
         scenario(3, 7, perception="disc", ticks=600),
         scenario(5, 10, "paper-sim", ticks=800, camera={"range": 1.5, "fade": 1.0}),
         scenario(
+            5, 10, "paper-sim", ticks=800, camera={"range": 1.5, "fade": 1.0, "bearing": "dots"}
+        ),
+        scenario(3, 7, "lab", ticks=900, urgency={"model": "static"}, walk={"curve": 90.0}),
+        scenario(
             3,
             7,
             "lab",
@@ -108,6 +112,8 @@ def test_large_swarm_event_logs_are_identical(realism):
         "turns-writes",
         "disc",
         "camera-fade",
+        "camera-bearing",
+        "curved-walk",
         "ble-search",
         "ble-search-exact-memory",
     ],

@@ -60,6 +60,7 @@ BLACKBOARD_KEYS = (
     "blocked_until",
     "seek",
     "seek_ref",
+    "curve",
 )
 """The robot's memory, one blackboard namespace per robot."""
 
@@ -156,6 +157,8 @@ def _steer(behaviour: RobotBehaviour) -> None:
         memory.walk = away_from(draws.walk, bumper)
         io.walk(memory.walk)
         memory.redirect = False
+    if config.walk_curve > 0 and draws.turn is not None:
+        _curve(behaviour, draws.turn, fresh=fresh, seeking=seeking)
     if config.walk_turn_ticks > 0 and draws.turn is not None:
         if fresh:
             memory.walk_clock = 0
@@ -172,6 +175,26 @@ def _steer(behaviour: RobotBehaviour) -> None:
             memory.walk = np.array([rx / norm, ry / norm])
             io.walk(memory.walk)
             memory.walk_clock = 0
+
+
+def _curve(behaviour: RobotBehaviour, turn: Float, *, fresh: bool, seeking: bool) -> None:
+    """A curved walk: a new leg takes this tick's ``turn``; the leg turns by it every tick.
+
+    ``decide._curve_walk`` for one robot; a seeker keeps its heading between hearings.
+    """
+    io, memory = behaviour.io, behaviour.memory
+    unset = memory.curve[0] == 0 and memory.curve[1] == 0
+    if fresh or (unset and not seeking):
+        memory.curve = np.array(turn, dtype=np.float64)
+    if fresh or seeking:
+        return
+    x, y = memory.walk[0], memory.walk[1]
+    c, n = memory.curve[0], memory.curve[1]
+    rx = x * c - y * n
+    ry = x * n + y * c
+    norm = np.sqrt(rx * rx + ry * ry)
+    memory.walk = np.array([rx / norm, ry / norm])
+    io.walk(memory.walk)
 
 
 class SelectCarrier(RobotBehaviour):
@@ -269,7 +292,7 @@ class SelectCarrier(RobotBehaviour):
 class RandomWalk(RobotBehaviour):
     """Random walk: drive on a random heading until something is met, then take a new one."""
 
-    keys = ("redirect", "walk", "walk_clock", "seek", "seek_ref")
+    keys = ("redirect", "walk", "walk_clock", "seek", "seek_ref", "curve")
 
     def sensed(self) -> Status:
         """Steer."""
@@ -280,7 +303,17 @@ class RandomWalk(RobotBehaviour):
 class ResumeWalk(RobotBehaviour):
     """Back to random walk (after a delivery, or giving a pursuit up): a fresh heading."""
 
-    keys = ("target", "face", "timer", "redirect", "walk", "walk_clock", "seek", "seek_ref")
+    keys = (
+        "target",
+        "face",
+        "timer",
+        "redirect",
+        "walk",
+        "walk_clock",
+        "seek",
+        "seek_ref",
+        "curve",
+    )
 
     def update(self) -> Status:
         """Walk again; the new heading is taken at the next sensed step (now, if this is one)."""

@@ -13,6 +13,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from swarmtag.errors import ConfigError
 from swarmtag.policy import Urgency
 from swarmtag.sim import (
     Camera,
@@ -276,6 +277,43 @@ def test_without_a_turn_interval_the_walk_is_not_turned():
     assert params.walk_turn_ticks == 0
     assert s.walk[0, :2].tolist() == [[0.6, 0.8], [0.6, 0.8]]
     assert s.walk_clock[0, :2].tolist() == [2, 1]
+
+
+def _curving(curve):
+    params = params_for(robots=4, carriers=1, walk=Walk(curve=curve))
+    before = _state(params, [(2.0, 0.5 + 0.6 * i) for i in range(4)], [(0.3, 0.3)], status=[IDLE])
+    before.walk[0] = [(0.6, 0.8), (0.6, 0.8), (0.6, 0.8), (0.6, 0.8)]
+    before.curve[0] = [(0.0, 1.0), (0.0, 0.0), (0.0, 1.0), (0.0, 1.0)]
+    before.contact[0, 2] = (0.01, 0.0)
+    before.mode[0, 3] = Mode.TRANSPORT
+    turn = np.tile([0.6, -0.8], (1, 4, 1))  # this tick's draw
+    inputs = replace(TickInputs.fixed(1, 4, walk=(1.0, 0.0)), turn=turn)
+    return params, *_decide(before, params, inputs)
+
+
+def test_a_curved_walk_turns_every_tick_by_its_legs_own_turn():
+    params, s, _ = _curving(90.0)
+    assert params.walk_curve == pytest.approx(np.radians(90.0) * 0.1)
+    np.testing.assert_allclose(
+        s.walk[0],
+        [[-0.8, 0.6], [0.6 * 0.6 + 0.8 * 0.8, 0.8 * 0.6 - 0.6 * 0.8], [1.0, 0.0], [0.6, 0.8]],
+        rtol=0,
+        atol=1e-12,
+    )
+    # robot 0 turns by its leg's 90 degrees, robot 1 had no turn yet and takes this tick's,
+    # robot 2 bumped into something: a new leg (new heading, this tick's turn), robot 3 carries
+    assert s.curve[0].tolist() == [[0.0, 1.0], [0.6, -0.8], [0.6, -0.8], [0.0, 1.0]]
+
+
+def test_without_a_curve_the_walk_keeps_its_heading():
+    params, s, _ = _curving(0.0)
+    assert params.walk_curve == 0
+    assert s.walk[0, :2].tolist() == [[0.6, 0.8], [0.6, 0.8]]
+
+
+def test_a_walk_cannot_both_turn_and_curve():
+    with pytest.raises(ConfigError, match=r"walk.curve: 90.0 deg/s with walk.turn_interval 1.0 s"):
+        Walk(curve=90.0, turn_interval=1.0)
 
 
 def _searching(camera: float, search: bool) -> Scenario:

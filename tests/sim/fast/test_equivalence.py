@@ -69,6 +69,12 @@ CASES = {
     "no-occlusion-short-camera": replace(PAPER, camera=Camera(range=1.2, occlusion="none")),
     "camera-fade": replace(PAPER, camera=Camera(range=1.5, fade=1.0, occlusion="carriers")),
     "camera-fade-memory": replace(PAPER, camera=Camera(range=1.2, fade=0.8, memory=3.0)),
+    "camera-bearing": replace(
+        PAPER, camera=Camera(range=1.5, fade=1.0, occlusion="carriers", bearing="dots")
+    ),
+    "camera-bearing-memory-disc": replace(
+        PAPER, camera=Camera(range=1.2, memory=3.0, bearing="dots")
+    ),
     "slow-radio": replace(PAPER, radio=Radio(range=3.0, interval=0.7)),
     "ble-search": replace(
         PAPER, camera=Camera(range=1.0, occlusion="carriers"), radio=Radio(search=True)
@@ -87,6 +93,13 @@ CASES = {
         realism=Realism(advertisement_loss=0.3, status_delay=2, detection_noise=0.03),
     ),
     "turning-walk": replace(PAPER, walk=Walk(turn_interval=0.4, turn_angle=75.0)),
+    "curved-walk": replace(LAB, walk=Walk(curve=90.0)),
+    "curved-walk-search": replace(
+        PAPER,
+        camera=Camera(range=1.0, bearing="dots"),
+        radio=Radio(search=True),
+        walk=Walk(curve=240.0),
+    ),
     "reprioritised": replace(
         PAPER,
         reprioritisations=(
@@ -159,6 +172,7 @@ cameras = st.builds(
     occlusion=st.sampled_from(["none", "carriers", "carriers+robots"]),
     memory=st.sampled_from([0.0, 0.0, 1.0, 6.0]),
     fade=st.sampled_from([0.0, 0.0, 0.5, 1.5]),
+    bearing=st.sampled_from(["uniform", "uniform", "dots"]),
 )
 realisms = st.builds(
     Realism,
@@ -186,7 +200,9 @@ def scenarios(draw: st.DrawFn) -> Scenario:
         motion=motion,
         camera=draw(cameras),
         realism=draw(realisms),
-        walk=draw(st.sampled_from([Walk(), Walk(turn_interval=0.3, turn_angle=90.0)])),
+        walk=draw(
+            st.sampled_from([Walk(), Walk(turn_interval=0.3, turn_angle=90.0), Walk(curve=90.0)])
+        ),
         urgency=UrgencyModel(model=model, static_time_limit=300),
     )
 
@@ -208,6 +224,7 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         replace(LARGE, camera=Camera(range=3.6, occlusion="carriers+robots")),
         replace(LARGE, camera=Camera(range=0.3, occlusion="carriers+robots", memory=2.0)),
         replace(LARGE, camera=Camera(range=1.0, fade=1.2, occlusion="carriers")),
+        replace(LARGE, camera=Camera(range=1.2, fade=0.6, occlusion="carriers", bearing="dots")),
         replace(LARGE, perception="disc", detection_radius=2.0),
         replace(LARGE, realism=Realism(advertisement_loss=0.2, detection_noise=0.02)),
         replace(LARGE, radio=Radio(range=0.8, interval=0.3)),  # the radio grid leaves tags out
@@ -222,6 +239,7 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         "robots-occlude",
         "memory",
         "fade",
+        "bearing",
         "disc",
         "realism",
         "short-radio",

@@ -99,3 +99,33 @@ def test_ordered_sum_is_left_to_right():
 
 def test_face_normals_are_east_north_west_south():
     assert FACE_NORMALS.tolist() == [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]
+
+
+def test_bearing_factor_matches_its_compiled_twin_bit_for_bit():
+    import numba
+
+    from swarmtag.sim.config.bearing import bearing_profile
+    from swarmtag.sim.fast._geometry import bearing_factor as compiled
+    from swarmtag.sim.model.geometry import bearing_factor
+
+    @numba.njit
+    def scalar(ox, oy, d, hx, hy, cosines, factors):  # noqa: PLR0917 - the twin's arguments
+        return compiled(ox, oy, d, hx, hy, cosines, factors)
+
+    cosines, factors = bearing_profile("dots")
+    rng = np.random.default_rng(4)
+    offset = rng.normal(size=(500, 2))
+    offset[:3] = [[0.0, 0.0], [1.0, 0.0], [-2.0, 0.0]]  # the robot's centre, ahead, behind
+    heading = rng.normal(size=(500, 2))
+    heading /= length(heading)[:, None]
+    heading[:3] = [1.0, 0.0]
+    distance = length(offset)
+    batched = bearing_factor(offset, distance, heading, cosines, factors)
+    one_by_one = [
+        scalar(o[0], o[1], d, h[0], h[1], cosines, factors)
+        for o, d, h in zip(offset, distance, heading, strict=True)
+    ]
+    assert batched.tolist() == one_by_one
+    assert batched[:3].tolist() == [1.0, 1.0, factors[-1]]
+    assert batched.min() >= factors.min()
+    assert batched.max() <= factors.max()

@@ -271,3 +271,31 @@ def test_without_ble_search_nothing_is_ranged_or_drawn():
     params = split_params(**{"radio.shadowing": 6.0})
     assert not params.radio_search
     assert RandomSource(params, seed=0, run_ids=[0]).inputs(1).rssi is None
+
+
+@pytest.mark.parametrize(
+    ("bearing", "expected"),
+    [("dots", [True, False, True, False, True]), ("uniform", [True] * 5)],
+)
+def test_a_bearing_profile_blinds_the_wedges_between_the_cameras(bearing, expected):
+    from swarmtag.sim import RandomSource
+    from swarmtag.sim.world.sensing import sense
+
+    # the robot faces +x; carriers 0.8 m ahead, at 73 degrees (blind), at 129 degrees
+    # (the rear cameras), 0.8 m behind (too far for the rear) and 0.15 m behind (near enough)
+    params = split_params(
+        carriers=5, **{"camera.range": 1.0, "camera.bearing": bearing, "radio.interval": 0.1}
+    )
+    angles = np.radians([0.0, 73.0, 129.0, 180.0, 180.0])
+    reach = np.array([0.8, 0.8, 0.8, 0.8, 0.15])
+    carriers = [
+        (2.0 + d * np.cos(a), 2.0 + d * np.sin(a)) for a, d in zip(angles, reach, strict=True)
+    ]
+    scene = Scene.build(robots=[(2.0, 2.0)], carriers=carriers)
+    state = initial_state(params, [scene], np.array([0]))
+    source = RandomSource(params, seed=3, run_ids=[0])
+    inputs = source.inputs(1)
+    assert sense(state, inputs, params).known[0, 0].tolist() == expected
+    turned = state.copy()
+    turned.heading[0, 0] = (0.0, 1.0)  # facing the 73-degree carrier: now 17 degrees off
+    assert sense(turned, inputs, params).known[0, 0, 1]

@@ -29,7 +29,9 @@ In this order, for every robot at once (broken robots are the world's,
    does a seeker that heard its tag more than ``seek_margin`` farther than
    the least on its current heading (run and tumble); with a turning walk,
    any other walking robot (not seeking) whose heading has been kept for
-   ``walk_turn_ticks`` rotates it by this tick's turn;
+   ``walk_turn_ticks`` rotates it by this tick's turn; with a curved walk
+   (``walk_curve``) a new heading comes with this tick's turn and every
+   other walking robot (not seeking) rotates its heading by its leg's;
 5. a loaded robot stuck for ``stuck_ticks`` starts a sidestep of
    ``sidestep_ticks`` along this tick's sidestep direction (reversed alike).
 """
@@ -234,6 +236,27 @@ def _turn_walk(s: WorldState, walking: NDArray[np.bool_], turn: Float, every: in
     s.walk_clock[due] = 0
 
 
+def _curve_walk(
+    s: WorldState, turning: NDArray[np.bool_], fresh: NDArray[np.bool_], turn: Float
+) -> None:
+    """A curved walk: each new leg takes this tick's turn, and every leg turns by its own.
+
+    ``fresh`` robots (a new heading) and ``turning`` ones without a turn yet
+    take ``turn``; the others that are ``turning`` rotate their walk by theirs.
+    """
+    unset = (s.curve[..., 0] == 0) & (s.curve[..., 1] == 0)
+    np.copyto(s.curve, turn, where=(fresh | (turning & unset))[..., None])
+    rotating = turning & ~fresh
+    if not rotating.any():
+        return
+    x, y = s.walk[..., 0], s.walk[..., 1]
+    c, n = s.curve[..., 0], s.curve[..., 1]
+    rx = x * c - y * n
+    ry = x * n + y * c
+    norm = np.where(rotating, np.sqrt(rx * rx + ry * ry), 1.0)  # others may have no turn yet
+    np.copyto(s.walk, np.stack((rx / norm, ry / norm), axis=-1), where=rotating[..., None])
+
+
 def decide(
     before: WorldState,
     s: WorldState,
@@ -260,6 +283,8 @@ def decide(
     if fresh.any():
         np.copyto(s.walk, away_from(inputs.walk, s.contact), where=fresh[..., None])
         s.redirect[fresh] = False
+    if params.walk_curve > 0 and inputs.turn is not None:
+        _curve_walk(s, turning, fresh, inputs.turn)
     if params.walk_turn_ticks > 0 and inputs.turn is not None:
         _turn_walk(s, turning & ~fresh, inputs.turn, params.walk_turn_ticks)
         s.walk_clock[fresh] = 0

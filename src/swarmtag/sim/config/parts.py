@@ -251,7 +251,11 @@ class Walk:
     a carrier or another robot. With ``turn_interval`` > 0 (seconds) it also
     turns its heading every ``turn_interval`` by an angle drawn uniformly
     from ``[-turn_angle, turn_angle]`` degrees (a correlated random walk; 180
-    gives a fresh uniform heading); 0 keeps it straight until contact.
+    gives a fresh uniform heading); 0 keeps it straight until contact. With
+    ``curve`` > 0 (degrees per second) the walk is curved instead, as the
+    lab's example controllers drive: each new heading comes with an angular
+    velocity drawn uniformly from ``[-curve, curve]`` that turns the heading
+    every tick until the next one (the controllers draw from ±90°/s).
     """
 
     turn_interval: float = param(
@@ -269,9 +273,23 @@ class Walk:
         high=180.0,
         kernel=Kernel("walk_turn_angle", RADIANS),
     )
+    curve: float = param(
+        0.0,
+        unit="deg/s",
+        doc="Largest angular velocity of a curved walk's leg (0: straight legs).",
+        low=0.0,
+        high=3600.0,
+    )
 
     def __post_init__(self) -> None:
         check_part(self, "walk")
+        if self.curve > 0 and self.turn_interval > 0:
+            msg = (
+                f"walk.curve: {self.curve!r} deg/s with walk.turn_interval "
+                f"{self.turn_interval!r} s (a walk either turns now and then or curves; "
+                "set one of them to 0)"
+            )
+            raise ConfigError(msg)
 
 
 @dataclass(frozen=True, slots=True)

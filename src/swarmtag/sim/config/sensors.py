@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Final
 
 from swarmtag.errors import ConfigError
+from swarmtag.sim.config.bearing import BEARING_PROFILES
 from swarmtag.sim.config.parts import MAX_DURATION, MAX_LENGTH
 from swarmtag.sim.config.schema import CHOICE_INDEX, MICROSECONDS, TICKS, Kernel, check_part, param
 
@@ -120,7 +121,10 @@ class Camera:
     (docs/perception.md). ``occlusion`` says what blocks the line of sight
     between the centres (``"none"``, other ``"carriers"``' footprints, or
     ``"carriers+robots"``); ``memory`` (s) is how long a robot remembers
-    where it last saw a carrier (0: only what it sees now). With
+    where it last saw a carrier (0: only what it sees now). ``bearing`` names
+    how the reach varies around the robot (``swarmtag.sim.config.bearing``):
+    ``"uniform"`` sees alike all round, ``"dots"`` as the DOTS robot's four
+    cameras do, blind around ±73° and short behind. With
     ``Scenario.perception_scaling = "arena"`` the kernel multiplies range
     and fade by ``Scenario.perception_factor``.
     """
@@ -154,6 +158,12 @@ class Camera:
         doc="Width of the detection ramp centred on range (0: a hard disc).",
         low=0.0,
         high=MAX_LENGTH,
+    )
+    bearing: str = param(
+        "uniform",
+        unit="",
+        doc="How the reach varies with bearing: alike all round, or a measured rig's profile.",
+        choices=tuple(BEARING_PROFILES),
     )
 
     def __post_init__(self) -> None:

@@ -20,9 +20,9 @@ A controller acts through the robots' command registers of ``WorldState``
 requests it returns (tag writes, driving in under a carrier, centring);
 the built-in controller also keeps its own memory in the state's other
 robot fields (``timer``, ``pursuit_start``, ``redirect``, ``stuck``,
-``blocked_until``, ``walk_clock``, ``seek``, ``seek_ref``). ``BUILTIN`` is the vectorised built-in
-controller; ``swarmtag.robot`` has the behaviour tree, which gives
-identical event logs.
+``blocked_until``, ``walk_clock``, ``seek``, ``seek_ref``, ``curve``).
+``BUILTIN`` is the vectorised built-in controller; ``swarmtag.robot`` has
+the behaviour tree, which gives identical event logs.
 """
 
 from __future__ import annotations
@@ -61,6 +61,7 @@ MEMORY_FIELDS: Final = (
     "walk_clock",
     "seek",
     "seek_ref",
+    "curve",
 )
 """Robot fields only the built-in controller reads and writes (its own memory)."""
 

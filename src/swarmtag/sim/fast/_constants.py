@@ -59,6 +59,8 @@ class Constants(NamedTuple):
     """The tick in whole microseconds: tags advertise on this grid. [us]"""
     walk_turn_ticks: int
     """A walking robot turns its heading every so many ticks (0: never). [ticks]"""
+    walk_curve: float
+    """A curved walk's largest turn per tick: walk.curve times the tick (0: no curve). [rad]"""
     time_scale: float
     """Event-log time units per tick: 1 (logs in ticks) or ``tick`` (seconds)."""
     timeout_ticks: int
@@ -147,8 +149,10 @@ class Constants(NamedTuple):
     """Find each robot's obstacle carriers with the grid, not a scan."""
     robot_grid: bool
     """Find each robot's neighbours with the grid (many robots), not a scan."""
+    sight_reach: float
+    """The camera's farthest reach: its far end times the top bearing factor."""
     sight_cell: float
-    """Side of a coarse grid cell: the camera's far reach (at least one)."""
+    """Side of a coarse grid cell: the camera's farthest reach (at least one)."""
     radio_grid: bool
     """Find the advertising tags each robot may hear with a grid."""
     radio_cell: float
@@ -177,6 +181,12 @@ class Constants(NamedTuple):
     """(K, 2) the pick-up slots' centres (lab: a dummy)."""
     slot_at: NDArray[np.int64]
     """(rows, cols) the pick-up slot of each cell, -1 none."""
+    bearing: bool
+    """The camera's reach varies with bearing (``Params.bearing_factor``)."""
+    bearing_cosines: NDArray[np.float64]
+    """The bearing profile's cosines, falling (``Params``)."""
+    bearing_factors: NDArray[np.float64]
+    """The reach's factor at each of them (``Params``)."""
 
 
 PARAMETERS = (
@@ -200,6 +210,7 @@ PARAMETERS = (
     "seek_margin",
     "tick_us",
     "walk_turn_ticks",
+    "walk_curve",
     "time_scale",
     "timeout_ticks",
     "run_ticks",

@@ -264,6 +264,28 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
 
 
 @inlined
+def _curve(
+    r: int, n: int, fresh: bool, seeking: bool, outside: np.ndarray, row: int, w: World
+) -> None:
+    """A walking robot's curved walk (``decide._curve_walk``): a new leg's turn, or the leg's."""
+    unset = w.curve[r, n, 0] == 0 and w.curve[r, n, 1] == 0
+    if fresh or (unset and not seeking):
+        w.curve[r, n, 0] = outside[r, row, n, 0]
+        w.curve[r, n, 1] = outside[r, row, n, 1]
+    if fresh or seeking:
+        return
+    hx = w.walk[r, n, 0]
+    hy = w.walk[r, n, 1]
+    c = w.curve[r, n, 0]
+    s = w.curve[r, n, 1]
+    rx = hx * c - hy * s
+    ry = hx * s + hy * c
+    length = math.sqrt(rx * rx + ry * ry)
+    w.walk[r, n, 0] = rx / length
+    w.walk[r, n, 1] = ry / length
+
+
+@inlined
 def _directions(
     r: int, n: int, t: int, outside: np.ndarray, row: int, w: World, k: Constants, x: Scratch
 ) -> None:
@@ -288,6 +310,8 @@ def _directions(
         w.walk[r, n, 0] = wx
         w.walk[r, n, 1] = wy
         w.redirect[r, n] = False
+    if k.walk_curve > 0 and walking:
+        _curve(r, n, fresh, seeking, outside, row, w)
     if k.walk_turn_ticks > 0:
         if walking and not fresh and not seeking:
             w.walk_clock[r, n] += 1

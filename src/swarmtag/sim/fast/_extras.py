@@ -19,7 +19,16 @@ EXTRAS: Final[tuple[tuple[str, str, str], ...]] = (
     ("carrier_bits", "int", "The same for the carriers' grid tables."),
     ("obstacle_grid", "bool", "Find each robot's obstacle carriers with the grid, not a scan."),
     ("robot_grid", "bool", "Find each robot's neighbours with the grid (many robots), not a scan."),
-    ("sight_cell", "float", "Side of a coarse grid cell: the camera's far reach (at least one)."),
+    (
+        "sight_reach",
+        "float",
+        "The camera's farthest reach: its far end times the top bearing factor.",
+    ),
+    (
+        "sight_cell",
+        "float",
+        "Side of a coarse grid cell: the camera's farthest reach (at least one).",
+    ),
     ("radio_grid", "bool", "Find the advertising tags each robot may hear with a grid."),
     ("radio_cell", "float", "Side of a radio grid cell: the radio range, padded against rounding."),
     ("sparse_cache", "bool", "Robots keep their tag caches as short lists (``Params``)."),
@@ -34,5 +43,12 @@ EXTRAS: Final[tuple[tuple[str, str, str], ...]] = (
     ("floor_destinations", "NDArray[np.int64]", "(D,) the destination (area) ids."),
     ("pickup_slots", "NDArray[np.float64]", "(K, 2) the pick-up slots' centres (lab: a dummy)."),
     ("slot_at", "NDArray[np.int64]", "(rows, cols) the pick-up slot of each cell, -1 none."),
+    ("bearing", "bool", "The camera's reach varies with bearing (``Params.bearing_factor``)."),
+    (
+        "bearing_cosines",
+        "NDArray[np.float64]",
+        "The bearing profile's cosines, falling (``Params``).",
+    ),
+    ("bearing_factors", "NDArray[np.float64]", "The reach's factor at each of them (``Params``)."),
 )
 """The backend's own fields of ``Constants``, after the parameters, in this order."""

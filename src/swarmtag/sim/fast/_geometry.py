@@ -20,6 +20,7 @@ __all__ = [
     "FACE_X",
     "FACE_Y",
     "away_from",
+    "bearing_factor",
     "contact",
     "maximum",
     "minimum",
@@ -53,6 +54,33 @@ def minimum(a: float, b: float) -> float:
 def norm(x: float, y: float) -> float:
     """``geometry.length``: ``sqrt(x*x + y*y)``."""
     return math.sqrt(x * x + y * y)
+
+
+@jit
+def bearing_factor(
+    ox: float,
+    oy: float,
+    distance: float,
+    hx: float,
+    hy: float,
+    cosines: np.ndarray,
+    factors: np.ndarray,
+) -> float:
+    """``geometry.bearing_factor`` for one offset: linear in the bearing's cosine."""
+    cos = 1.0
+    if distance > 0:
+        cos = (ox * hx + oy * hy) / distance
+    cos = minimum(maximum(cos, -1.0), 1.0)
+    i = 0
+    for j in range(1, cosines.size - 1):
+        if cosines[j] > cos:
+            i += 1
+    p0 = cosines[i]
+    p1 = cosines[i + 1]
+    f0 = factors[i]
+    f1 = factors[i + 1]
+    factor: float = f0 + (f1 - f0) * ((p0 - cos) / (p0 - p1))
+    return factor
 
 
 @jit

@@ -76,6 +76,7 @@ class World(NamedTuple):
     walk_clock: I8
     seek: I8
     seek_ref: F8
+    curve: F8
     carrier_pos: F8
     status: S1
     urgency: S1
@@ -189,7 +190,9 @@ def constants_of(params: Params, cache_capacity: int = 0) -> Constants:
         floor_cell, rows, cols = floor.cell, floor.rows, floor.cols
     half, radius = params.carrier_half, params.robot_radius
     cell = max(2 * half, half + radius, 2 * radius)
-    sight = max(cell, params.camera_far)
+    bearing = params.bearing_factor.size > 0
+    reach = params.camera_far * float(params.bearing_factor.max()) if bearing else params.camera_far
+    sight = max(cell, reach)
     radio_scale = max(params.arena, params.arena_height)
     shared = {name: getattr(params, name) for name in PARAMETERS}
     return Constants(
@@ -201,6 +204,7 @@ def constants_of(params: Params, cache_capacity: int = 0) -> Constants:
         carrier_bits=table_bits(params.carriers),
         obstacle_grid=params.carriers > GRID_FROM,
         robot_grid=params.robots > GRID_FROM,
+        sight_reach=reach,
         sight_cell=sight,
         radio_grid=_radio_grid_pays(params),
         radio_cell=padding(params.radio_range, radio_scale),
@@ -216,6 +220,9 @@ def constants_of(params: Params, cache_capacity: int = 0) -> Constants:
         floor_destinations=destinations,
         pickup_slots=slots,
         slot_at=slot_at,
+        bearing=bearing,
+        bearing_cosines=np.array(params.bearing_cos if bearing else np.zeros(2)),
+        bearing_factors=np.array(params.bearing_factor if bearing else np.ones(2)),
     )
 
 

@@ -57,6 +57,7 @@ from swarmtag.sim.model.randomness import (
     rssi_factors,
     rssi_on,
     stream,
+    walk_drawn,
     walk_turns,
 )
 from swarmtag.sim.model.state import WorldState
@@ -131,9 +132,7 @@ class _Streams:
                 generators = [stream(seed, run, purpose) for run in run_ids]
                 self.states[:, row] = states_of(generators)
         self._walk = (
-            [stream(seed, run, Stream.WALK) for run in run_ids]
-            if params.walk_turn_ticks > 0
-            else None
+            [stream(seed, run, Stream.WALK) for run in run_ids] if walk_drawn(params) else None
         )
         self._rssi = (
             [stream(seed, run, Stream.RSSI) for run in run_ids] if rssi_on(params) else None

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from swarmtag.sim.fast._floor import hidden_by_shelves
-from swarmtag.sim.fast._geometry import segment_crosses_box, segment_near_point
+from swarmtag.sim.fast._geometry import bearing_factor, segment_crosses_box, segment_near_point
 from swarmtag.sim.fast._grid import fill, near
 from swarmtag.sim.fast._jit import inlined
 from swarmtag.sim.fast._layout import Constants, World
@@ -289,12 +289,32 @@ def _hear(
 
 
 @inlined
-def _reach(r: int, n: int, c: int, k: Constants, x: Scratch) -> float:
-    """How far robot ``n`` sees carrier ``c`` this tick: its draw of the camera's ramp, or range."""
+def _reach(
+    r: int,
+    n: int,
+    c: int,
+    ox: float,
+    oy: float,
+    distance: float,
+    w: World,
+    k: Constants,
+    x: Scratch,
+) -> float:
+    """How far robot ``n`` sees carrier ``c`` (at offset ``ox, oy``) this tick.
+
+    Its draw of the camera's ramp, or the range; with a bearing profile,
+    times the factor at the carrier's bearing (``sense.sense``).
+    """
+    reach: float = k.camera_range
     if k.camera_fade > 0:
-        reach: float = x.sight[r, n, c]
-        return reach
-    return k.camera_range
+        reach = x.sight[r, n, c]
+    if k.bearing:
+        hx = w.heading[r, n, 0]
+        hy = w.heading[r, n, 1]
+        reach = reach * bearing_factor(
+            ox, oy, distance, hx, hy, k.bearing_cosines, k.bearing_factors
+        )
+    return reach
 
 
 @inlined
@@ -305,7 +325,7 @@ def _out_of_sight(r: int, rx: float, ry: float, k: Constants, x: Scratch) -> boo
     rounding: a carrier that far along one axis fails ``distance <= range``.
     """
     box = x.obstacle_box
-    far = k.camera_far * (1.0 + 1e-6) + 1e-9
+    far = k.sight_reach * (1.0 + 1e-6) + 1e-9
     away: bool = (
         x.obstacle_count[r] == 0
         or rx - box[r, 1] > far
@@ -351,7 +371,7 @@ def _sense_split_now(
                 r,
                 rx,
                 ry,
-                k.camera_far,
+                k.sight_reach,
                 k.sight_cell,
                 k.carrier_bits,
                 x.sight_start,
@@ -365,7 +385,8 @@ def _sense_split_now(
                 continue
             ox = w.carrier_pos[r, c, 0] - rx
             oy = w.carrier_pos[r, c, 1] - ry
-            if math.sqrt(ox * ox + oy * oy) <= _reach(r, n, c, k, x):
+            distance = math.sqrt(ox * ox + oy * oy)
+            if distance <= _reach(r, n, c, ox, oy, distance, w, k, x):
                 _camera(r, n, c, t, ox, oy, w, k, x)
 
 
@@ -419,7 +440,11 @@ def _sense_every_pair(
             present = w.present[r, c]
             if k.split:
                 heard = present and distance <= k.radio_range and x.advertises[r, c]
-                visible = present and w.carried_by[r, c] < 0 and distance <= _reach(r, n, c, k, x)
+                visible = (
+                    present
+                    and w.carried_by[r, c] < 0
+                    and distance <= _reach(r, n, c, ox, oy, distance, w, k, x)
+                )
             else:
                 heard = present and distance <= k.detection_radius
                 visible = heard

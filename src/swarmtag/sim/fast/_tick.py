@@ -66,11 +66,12 @@ def outside_drawn(k: Constants) -> bool:
     """Whether ticks have numbers drawn outside the kernel (walk turns, RSSI factors).
 
     Then ``outside[r, row, n]`` holds robot ``n``'s walk turn ``(cos, sin)``
-    (zeros when the walk does not turn) and, from column 2, its RSSI error
+    (a curved walk's turn per tick; zeros when the walk neither turns nor
+    curves) and, from column 2, its RSSI error
     factor per carrier (with BLE-led search and shadowing); else ``outside``
     has one row of zeros.
     """
-    return k.walk_turn_ticks > 0 or (k.radio_search and k.rssi_sigma > 0)
+    return k.walk_turn_ticks > 0 or k.walk_curve > 0 or (k.radio_search and k.rssi_sigma > 0)
 
 
 @inlined

@@ -57,6 +57,8 @@ class ParamFields:
     """The tick in whole microseconds: tags advertise on this grid. [us]"""
     walk_turn_ticks: int
     """A walking robot turns its heading every so many ticks (0: never). [ticks]"""
+    walk_curve: float
+    """A curved walk's largest turn per tick: walk.curve times the tick (0: no curve). [rad]"""
     time_scale: float
     """Event-log time units per tick: 1 (logs in ticks) or ``tick`` (seconds)."""
     timeout_ticks: int
@@ -157,6 +159,8 @@ class ControllerFields:
     """A seeker tumbles when its tag's estimate exceeds the leg's least by this factor."""
     walk_turn_ticks: int
     """A walking robot turns its heading every so many ticks (0: never). [ticks]"""
+    walk_curve: float
+    """A curved walk's largest turn per tick: walk.curve times the tick (0: no curve). [rad]"""
     timeout_ticks: int
     """A pursuit (predock, dock, centre) gives up after this long. [ticks]"""
     arrival_tolerance: float

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 __all__ = [
     "FACE_NORMALS",
     "Float",
+    "bearing_factor",
     "clamp_to_box",
     "contact_push",
     "contact_xy",
@@ -210,3 +211,28 @@ def segment_near_point(start: Float, end: Float, point: Float, radius: float) ->
     oy = qy - along * dy
     near: NDArray[np.bool_] = ox * ox + oy * oy < radius * radius
     return near
+
+
+def bearing_factor(
+    offset: Float, distance: Float, heading: Float, cosines: Float, factors: Float
+) -> Float:
+    """A bearing profile's factor for each offset seen from a robot facing ``heading``.
+
+    ``cos(bearing) = (offset . heading) / distance`` (1 at distance 0),
+    clipped to [-1, 1]; between the profile's points (``cosines`` falling
+    from 1 to -1) the factor is linear in it (``swarmtag.sim.config.bearing``).
+
+    >>> cosines, factors = np.array([1.0, 0.0, -1.0]), np.array([1.0, 0.5, 0.25])
+    >>> offset = np.array([[2.0, 0.0], [0.0, -3.0], [-2.0, 0.0]])
+    >>> bearing_factor(offset, length(offset), np.array([1.0, 0.0]), cosines, factors)
+    array([1.  , 0.5 , 0.25])
+    """
+    dot = offset[..., 0] * heading[..., 0] + offset[..., 1] * heading[..., 1]
+    ahead = distance > 0
+    cos = np.divide(dot, distance, out=np.ones(dot.shape), where=ahead)
+    cos = np.minimum(np.maximum(cos, -1.0), 1.0)
+    i = (cosines[1:-1] > cos[..., None]).sum(axis=-1)
+    p0, p1 = cosines[i], cosines[i + 1]
+    f0, f1 = factors[i], factors[i + 1]
+    factor: Float = f0 + (f1 - f0) * ((p0 - cos) / (p0 - p1))
+    return factor

@@ -259,6 +259,14 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
         controller=True,
     ),
     KernelParameter(
+        "walk_curve",
+        float,
+        "rad",
+        "A curved walk's largest turn per tick: walk.curve times the tick (0: no curve).",
+        lambda s: math.radians(s.walk.curve) * s.tick,
+        controller=True,
+    ),
+    KernelParameter(
         "time_scale",
         float,
         "",

@@ -17,10 +17,12 @@ from numpy.typing import NDArray
 
 from swarmtag.errors import ConfigError
 from swarmtag.policy import Policy
+from swarmtag.sim.config.bearing import bearing_profile
 from swarmtag.sim.config.floor_map import FloorMap
 from swarmtag.sim.config.scenario import Scenario
 from swarmtag.sim.config.warehouse import floor_of
 from swarmtag.sim.model._fields import ParamFields
+from swarmtag.sim.model.geometry import Float
 from swarmtag.sim.model.kernel_parameters import derive_all
 
 __all__ = ["FIRST_CACHE_CAPACITY", "Params", "make_params", "sparse_tag_cache"]
@@ -46,6 +48,10 @@ class Params(ParamFields):
     """The warehouse floor (shelves, pick-up and drop-off cells); None in the lab arena."""
     sparse_tag_cache: bool
     """The compiled kernel keeps each robot's tag cache as a short list (``sparse_tag_cache``)."""
+    bearing_cos: Float
+    """The camera's bearing profile (``camera.bearing``): its points' cosines, falling 1 to -1."""
+    bearing_factor: Float
+    """The reach's factor at each point (both empty: alike all round)."""
 
     @property
     def condition(self) -> str:
@@ -97,11 +103,14 @@ def make_params(scenario: Scenario, policy: Policy) -> Params:
         raise ConfigError(msg)
     markers = np.arange(scenario.carriers, dtype=np.int64)
     markers.flags.writeable = False
+    bearing_cos, bearing_factor = bearing_profile(scenario.camera.bearing)
     return Params(
         scenario=scenario,
         policy=policy,
         markers=markers,
         floor=None if scenario.warehouse is None else floor_of(scenario.warehouse),
         sparse_tag_cache=sparse_tag_cache(scenario),
+        bearing_cos=bearing_cos,
+        bearing_factor=bearing_factor,
         **derive_all(scenario),
     )

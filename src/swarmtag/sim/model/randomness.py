@@ -15,9 +15,10 @@ k   stream     draws
 4   camera     per tick ``standard_normal((N, C, 2))``: detection noise,
                times sigma, added to carrier ``c``'s position as seen by ``r``
 5   walk       per tick ``random(N)``: robot ``r``'s walk turn angle
-               ``(2u - 1) * a`` for the largest turn ``a``, as the unit
-               vector ``(cos, sin)`` (the one place an angle meets a
-               transcendental function, outside every kernel)
+               ``(2u - 1) * a`` for the largest turn ``a`` (a curved walk:
+               its largest turn per tick), as the unit vector ``(cos, sin)``
+               (the one place an angle meets a transcendental function,
+               outside every kernel)
 6   sight      per tick ``random((N, C))``: with a camera fade, robot ``r``
                sees carrier ``c`` only within ``far - u * fade``
                (``camera_far``: the range plus half the fade), a linear
@@ -62,6 +63,7 @@ __all__ = [
     "rssi_on",
     "stream",
     "unit_vectors",
+    "walk_drawn",
     "walk_turns",
 ]
 
@@ -111,13 +113,20 @@ def unit_vectors(gaussians: Float) -> Float:
     return np.where(zero[..., None], np.array([1.0, 0.0]), unit)
 
 
+def walk_drawn(params: Params) -> bool:
+    """Whether runs of ``params`` draw the walk stream: a turning or a curved walk."""
+    return params.walk_turn_ticks > 0 or params.walk_curve > 0
+
+
 def walk_turns(uniform: Float, params: Params) -> Float:
     """Walk turns ``(cos, sin)`` (last axis) from the walk stream's uniform numbers.
 
-    The angle is ``(2u - 1) * walk_turn_angle``; every backend takes its
-    turns from here, so the one transcendental step is the same numpy call.
+    The angle is ``(2u - 1) * walk_turn_angle`` (a curved walk:
+    ``walk_curve``, a turn per tick); every backend takes its turns from
+    here, so the one transcendental step is the same numpy call.
     """
-    angle = (2.0 * uniform - 1.0) * params.walk_turn_angle
+    largest = params.walk_curve if params.walk_curve > 0 else params.walk_turn_angle
+    angle = (2.0 * uniform - 1.0) * largest
     turns: Float = np.stack((np.cos(angle), np.sin(angle)), axis=-1)
     return turns
 
@@ -218,7 +227,7 @@ class RandomSource:
             self._purposes[Stream.RADIO] = (n, c)
         if params.detection_noise > 0:
             self._purposes[Stream.CAMERA] = (n, c, 2)
-        if params.walk_turn_ticks > 0:
+        if walk_drawn(params):
             self._purposes[Stream.WALK] = (n,)
         if params.camera_fade > 0:
             self._purposes[Stream.SIGHT] = (n, c)

@@ -121,6 +121,9 @@ class WorldState:
     """(R, N) the tag a walking robot seeks by its signal (BLE-led search); -1 none."""
     seek_ref: Float
     """(R, N) the seeker's estimate of its tag's distance when it last compared one."""
+    curve: Float
+    """(R, N, 2) a curved walk's turn per tick on the current leg as ``(cos, sin)``; ``(0, 0)``
+    before the first is drawn."""
     # carriers and their tags
     carrier_pos: Float
     """(R, C, 2) centre, metres."""
@@ -395,6 +398,7 @@ def initial_state(
         walk_clock=robots(0),
         seek=robots(-1),
         seek_ref=np.zeros((runs, n)),
+        curve=np.zeros((runs, n, 2)),
         carrier_pos=carrier_pos,
         status=status,
         urgency=urgency0.copy(),

@@ -10,7 +10,9 @@ the last status and urgency it heard per tag (its BLE cache). Two models:
   whole microseconds) and the advertisement is not lost. The camera sees
   carrier c when it is in the arena and not carried, within
   ``camera.range`` (centre to centre; with a camera fade, within this
-  tick's draw of the detection ramp), and, with occlusion, the segment
+  tick's draw of the detection ramp; with a bearing profile, that reach
+  times the profile's factor at the carrier's bearing from the robot's
+  heading), and, with occlusion, the segment
   between the centres crosses no other such carrier's footprint (nor, with
   ``carriers+robots``, passes within a radius of another robot's centre).
   A sighting records the tick and the position seen (true position plus
@@ -36,7 +38,13 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag.sim.model.geometry import Float, length, segment_crosses_box, segment_near_point
+from swarmtag.sim.model.geometry import (
+    Float,
+    bearing_factor,
+    length,
+    segment_crosses_box,
+    segment_near_point,
+)
 from swarmtag.sim.model.params import Params
 from swarmtag.sim.model.randomness import TickInputs
 from swarmtag.sim.model.state import Int, Mode, WorldState
@@ -208,6 +216,12 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         heard = present & (distance <= params.radio_range)
         heard &= advertising(state.advert_phase, t, params)[:, None, :]
         reach = params.camera_range if inputs.sight is None else inputs.sight
+        if params.bearing_factor.size:
+            heading = state.heading[:, :, None, :]
+            factor = bearing_factor(
+                offset, distance, heading, params.bearing_cos, params.bearing_factor
+            )
+            reach = reach * factor
         visible = present & (state.carried_by < 0)[:, None, :] & (distance <= reach)
     else:
         heard = visible = present & (distance <= params.detection_radius)
