@@ -84,6 +84,13 @@ def test_large_swarm_event_logs_are_identical(realism):
         ),
         scenario(3, 7, "lab", ticks=900, urgency={"model": "static"}, walk={"curve": 90.0}),
         scenario(
+            5,
+            10,
+            "paper-sim",
+            ticks=800,
+            camera={"range": 1.5, "fade": 1.0, "bearing": "dots", "look_around": 1.0},
+        ),
+        scenario(
             3,
             7,
             "lab",
@@ -114,6 +121,7 @@ def test_large_swarm_event_logs_are_identical(realism):
         "camera-fade",
         "camera-bearing",
         "curved-walk",
+        "look-around",
         "ble-search",
         "ble-search-exact-memory",
     ],

@@ -61,6 +61,7 @@ BLACKBOARD_KEYS = (
     "seek",
     "seek_ref",
     "curve",
+    "look",
 )
 """The robot's memory, one blackboard namespace per robot."""
 
@@ -216,6 +217,7 @@ class SelectCarrier(RobotBehaviour):
         "seek_ref",
         "timer",
         "redirect",
+        "look",
     )
 
     def update(self) -> Status:
@@ -234,6 +236,8 @@ class SelectCarrier(RobotBehaviour):
         )
         if not searching:
             available &= seen.known
+            if config.look_ticks > 0 and not self._looked_round(bool(available.any())):
+                available &= False  # looking round: nothing chosen yet
         if not available.any():
             return Status.FAILURE
         choice = int(
@@ -255,6 +259,24 @@ class SelectCarrier(RobotBehaviour):
             return Status.FAILURE
         self._approach(choice, seen)
         return Status.SUCCESS
+
+    def _looked_round(self, candidates: bool) -> bool:
+        """Whether to choose now: a look round before choosing ends (``decide._look_round``).
+
+        Not looking, a robot with ``candidates`` begins to look (stands and
+        turns) and chooses nothing yet.
+        """
+        io, memory = self.io, self.memory
+        if memory.look < 0:
+            if candidates:
+                memory.look = io.tick
+                io.look(io.tick)
+            return False
+        if io.tick - memory.look < self.config.look_ticks:
+            return False
+        memory.look = -1
+        io.look(-1)
+        return True
 
     def _confirm(self) -> Status:
         """A seeker approaches its carrier once a camera sees it (still a candidate)."""

@@ -192,6 +192,14 @@ class RobotIO(Protocol):
         """Drive to the predock point of ``carrier``'s ``face`` and turn to face the carrier."""
         ...
 
+    def look(self, since: int) -> None:
+        """Stand and turn in place so the cameras sweep round, looking since tick ``since``.
+
+        -1 stops looking (the walk goes on). While looking, ``detections``
+        knows every carrier seen since then.
+        """
+        ...
+
     def dock(self) -> None:
         """Drive in under the carrier being approached, towards its centre."""
         ...

@@ -203,6 +203,10 @@ class SimRobotIO:
         if direction is not None:
             s.walk[r, n] = direction
 
+    def look(self, since: int) -> None:
+        """Look round (stand and turn) since tick ``since``; -1 stops."""
+        self.context.s.look[self.row, self._robot] = since
+
     def approach(self, carrier: int, face: int) -> None:
         """Drive to the predock point of ``face``."""
         s, r, n = self.context.s, self.row, self._robot

@@ -132,9 +132,9 @@ def initialise_memory(
     memory = py_trees.blackboard.Client(name="memory", namespace=namespace)
     for key in ("target", "face", "pursuit_start", "timer", "redirect", "stuck"):
         memory.register_key(key=key, access=py_trees.common.Access.WRITE)
-    for key in ("walk", "walk_clock", "blocked_until", "seek", "seek_ref", "curve"):
+    for key in ("walk", "walk_clock", "blocked_until", "seek", "seek_ref", "curve", "look"):
         memory.register_key(key=key, access=py_trees.common.Access.WRITE)
-    memory.target = memory.face = memory.pursuit_start = memory.seek = -1
+    memory.target = memory.face = memory.pursuit_start = memory.seek = memory.look = -1
     memory.seek_ref = 0.0
     memory.curve = np.zeros(2)
     memory.timer = memory.stuck = memory.walk_clock = 0

@@ -225,3 +225,17 @@ def test_perception_scaling_is_refused_on_a_warehouse_floor():
     part = {"map": "small-warehouse", "order_interval": 60.0}
     with pytest.raises(ConfigError, match="perception_scaling: 'arena'"):
         load_profile("lab").scenario({"warehouse": part, "perception_scaling": "arena"})
+
+
+@pytest.mark.parametrize(
+    "values",
+    [{"perception": "disc"}, {"radio": {"search": True}}],
+    ids=["disc", "search"],
+)
+def test_a_look_round_needs_split_perception_without_search(values):
+    mapping = Scenario.default(3, 7, profile="paper-sim").to_mapping()
+    mapping["camera"] |= {"look_around": 1.0}
+    for key, value in values.items():
+        mapping[key] = mapping.get(key, {}) | value if isinstance(value, dict) else value
+    with pytest.raises(ConfigError, match=r"camera.look_around: a look round before choosing"):
+        Scenario.from_mapping(mapping)

@@ -75,6 +75,17 @@ CASES = {
     "camera-bearing-memory-disc": replace(
         PAPER, camera=Camera(range=1.2, memory=3.0, bearing="dots")
     ),
+    "look-around": replace(
+        PAPER,
+        camera=Camera(range=1.5, fade=1.0, occlusion="carriers", bearing="dots", look_around=1.0),
+    ),
+    "look-around-memory-noise": replace(
+        PAPER,
+        ticks=900,
+        camera=Camera(range=1.2, memory=0.3, bearing="dots", look_around=0.8),
+        realism=Realism(detection_noise=0.03, advertisement_loss=0.2),
+        walk=Walk(curve=90.0),
+    ),
     "slow-radio": replace(PAPER, radio=Radio(range=3.0, interval=0.7)),
     "ble-search": replace(
         PAPER, camera=Camera(range=1.0, occlusion="carriers"), radio=Radio(search=True)
@@ -173,6 +184,7 @@ cameras = st.builds(
     memory=st.sampled_from([0.0, 0.0, 1.0, 6.0]),
     fade=st.sampled_from([0.0, 0.0, 0.5, 1.5]),
     bearing=st.sampled_from(["uniform", "uniform", "dots"]),
+    look_around=st.sampled_from([0.0, 0.0, 0.5]),
 )
 realisms = st.builds(
     Realism,
@@ -191,14 +203,18 @@ def scenarios(draw: st.DrawFn) -> Scenario:
     motion = draw(motions.filter(lambda m: m.speed * tick <= 0.125))  # at most a radius a tick
     base = Scenario.default(draw(st.integers(1, 8)), draw(st.integers(1, 12)), profile="base")
     model = draw(st.sampled_from(["growing", "static"]))
+    perception = draw(st.sampled_from(["disc", "split"]))
+    camera = draw(cameras)
+    if perception == "disc":  # a look round needs split perception
+        camera = replace(camera, look_around=0.0)
     return replace(
         base,
         ticks=300,
         tick=tick,
-        perception=draw(st.sampled_from(["disc", "split"])),
+        perception=perception,
         detection_radius=1.5,
         motion=motion,
-        camera=draw(cameras),
+        camera=camera,
         realism=draw(realisms),
         walk=draw(
             st.sampled_from([Walk(), Walk(turn_interval=0.3, turn_angle=90.0), Walk(curve=90.0)])
@@ -225,6 +241,7 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         replace(LARGE, camera=Camera(range=0.3, occlusion="carriers+robots", memory=2.0)),
         replace(LARGE, camera=Camera(range=1.0, fade=1.2, occlusion="carriers")),
         replace(LARGE, camera=Camera(range=1.2, fade=0.6, occlusion="carriers", bearing="dots")),
+        replace(LARGE, camera=Camera(range=1.2, occlusion="carriers", look_around=1.0)),
         replace(LARGE, perception="disc", detection_radius=2.0),
         replace(LARGE, realism=Realism(advertisement_loss=0.2, detection_noise=0.02)),
         replace(LARGE, radio=Radio(range=0.8, interval=0.3)),  # the radio grid leaves tags out
@@ -240,6 +257,7 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         "memory",
         "fade",
         "bearing",
+        "look-around",
         "disc",
         "realism",
         "short-radio",

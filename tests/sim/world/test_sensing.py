@@ -299,3 +299,27 @@ def test_a_bearing_profile_blinds_the_wedges_between_the_cameras(bearing, expect
     turned = state.copy()
     turned.heading[0, 0] = (0.0, 1.0)  # facing the 73-degree carrier: now 17 degrees off
     assert sense(turned, inputs, params).known[0, 0, 1]
+
+
+@pytest.mark.parametrize(
+    ("look", "expected"), [(2.0, [(21, "select", 0, 1)]), (0.0, [(1, "select", 0, 0)])]
+)
+def test_a_look_round_finds_the_carrier_in_the_blind_wedge(look, expected):
+    # facing +x: carrier 0 (urgency 1) 0.8 m ahead is seen at once; carrier 1 (urgency 9)
+    # 0.7 m away at 73 degrees is in the dots cameras' blind wedge until the robot turns
+    values = {"camera.range": 1.0, "camera.bearing": "dots", "radio.interval": 0.1}
+    params = split_params(Urgency(alpha=9.0), carriers=2, **values, **{"camera.look_around": look})
+    assert params.look_ticks == round(look / 0.1)
+    angle = np.radians(73.0)
+    scene = Scene.build(
+        robots=[(1.5, 2.0)],
+        carriers=[(2.3, 2.0), (1.5 + 0.7 * np.cos(angle), 2.0 + 0.7 * np.sin(angle))],
+        urgency=[1, 9],
+    )
+    result = run_script(params, scene, 22, walk=(1.0, 0.0))
+    assert event_rows(result) == expected
+    if look:  # it stands while it looks round, turning counter-clockwise a step a tick
+        looking = run_script(params, scene, 20, walk=(1.0, 0.0)).final_state
+        assert looking.robot_pos[0, 0].tolist() == [1.5, 2.0]
+        assert looking.look[0, 0] == 1
+        assert looking.heading[0, 0] == pytest.approx([-1.0, 0.0], abs=1e-9)  # 20 x 9 degrees

@@ -22,7 +22,10 @@ In this order, for every robot at once (broken robots are the world's,
    the position is known, else the robot's RSSI estimate; a chosen tag not
    seen is *sought*: the robot walks on (``seek``) and approaches the
    carrier once its camera sees it, the pursuit's checks and timeout
-   applying from the choice on (a seeker chooses nothing else);
+   applying from the choice on (a seeker chooses nothing else); with a
+   look round (``look_ticks``) a walker that has a candidate first stands
+   and turns for ``look_ticks`` ticks (``look``) and then chooses among
+   what it saw meanwhile;
 4. a walking robot that touched something last tick, or has just returned
    to walking, takes this tick's random direction, reversed if it points
    into what it touched (negative dot product with the contact push); so
@@ -149,6 +152,8 @@ def _selection(
         distance = np.where(senses.known, senses.distance, s.rssi)
     else:
         available = walkers[..., None] & senses.known & open_tags
+        if params.look_ticks > 0:
+            available = _look_round(s, walkers, available, t, params)
     if not available.any():
         return
     choice = select(
@@ -170,6 +175,24 @@ def _selection(
         s.seek_ref[seek] = own(s.rssi, choice)[seek]
         chosen &= ~seek
     _approach(s, choice, chosen, params)
+
+
+def _look_round(
+    s: WorldState, walkers: NDArray[np.bool_], available: NDArray[np.bool_], t: int, params: Params
+) -> NDArray[np.bool_]:
+    """``available`` for the walkers whose look round ends now; the others look or walk on.
+
+    A walker not looking that has a candidate begins to look (``look = t``:
+    it stands and turns, ``motion.move``); one whose look has lasted
+    ``look_ticks`` stops looking and chooses among what it saw meanwhile.
+    """
+    looking = walkers & (s.look >= 0)
+    begin = walkers & ~looking & available.any(axis=-1)
+    done = looking & (t - s.look >= params.look_ticks)
+    s.look[begin] = t
+    s.look[done] = -1
+    chooses: NDArray[np.bool_] = available & done[..., None]
+    return chooses
 
 
 def _approach(s: WorldState, carrier: Int, chosen: NDArray[np.bool_], params: Params) -> None:

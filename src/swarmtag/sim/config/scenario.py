@@ -172,6 +172,12 @@ class Scenario:
         if self.radio.search and perception != "split":
             msg = "radio.search: BLE-led search needs perception = 'split' (radio and camera apart)"
             raise ConfigError(msg)
+        if self.camera.look_around > 0 and (perception != "split" or self.radio.search):
+            msg = (
+                "camera.look_around: a look round before choosing needs perception = 'split' "
+                "and no radio.search (a seeker chooses by its radio)"
+            )
+            raise ConfigError(msg)
         if self.warehouse is not None:
             self._order_capacity()
         self._check_durations()

@@ -124,7 +124,11 @@ class Camera:
     where it last saw a carrier (0: only what it sees now). ``bearing`` names
     how the reach varies around the robot (``swarmtag.sim.config.bearing``):
     ``"uniform"`` sees alike all round, ``"dots"`` as the DOTS robot's four
-    cameras do, blind around ±73° and short behind. With
+    cameras do, blind around ±73° and short behind. With ``look_around``
+    > 0 (s) a walking robot that sees a candidate does not choose at once:
+    it stands and turns in place (counter-clockwise at ``motion.turn_rate``)
+    for that long so that its cameras sweep round, then chooses among every
+    carrier it saw meanwhile. With
     ``Scenario.perception_scaling = "arena"`` the kernel multiplies range
     and fade by ``Scenario.perception_factor``.
     """
@@ -158,6 +162,13 @@ class Camera:
         doc="Width of the detection ramp centred on range (0: a hard disc).",
         low=0.0,
         high=MAX_LENGTH,
+    )
+    look_around: float = param(
+        0.0,
+        unit="s",
+        doc="On a first sighting a robot stands and turns this long, then chooses (0: at once).",
+        low=0.0,
+        high=MAX_DURATION,
     )
     bearing: str = param(
         "uniform",

@@ -16,7 +16,7 @@ between sensor updates:
 
 A controller acts through the robots' command registers of ``WorldState``
 (``mode``: the behaviour and motion primitive the robot runs, ``target``,
-``face``, ``goal``, ``walk``, ``sidestep``, ``sidestep_dir``) and the
+``face``, ``goal``, ``walk``, ``sidestep``, ``sidestep_dir``, ``look``) and the
 requests it returns (tag writes, driving in under a carrier, centring);
 the built-in controller also keeps its own memory in the state's other
 robot fields (``timer``, ``pursuit_start``, ``redirect``, ``stuck``,
@@ -50,7 +50,16 @@ __all__ = [
     "no_carrying",
 ]
 
-COMMAND_FIELDS: Final = ("mode", "target", "face", "goal", "walk", "sidestep", "sidestep_dir")
+COMMAND_FIELDS: Final = (
+    "mode",
+    "target",
+    "face",
+    "goal",
+    "walk",
+    "sidestep",
+    "sidestep_dir",
+    "look",
+)
 """Robot fields a controller sets and the world reads (the command registers)."""
 MEMORY_FIELDS: Final = (
     "timer",

@@ -59,6 +59,10 @@ class Constants(NamedTuple):
     """The tick in whole microseconds: tags advertise on this grid. [us]"""
     walk_turn_ticks: int
     """A walking robot turns its heading every so many ticks (0: never). [ticks]"""
+    look_ticks: int
+    """A robot that sees a candidate stands and turns this many ticks before choosing (0: no).
+    [ticks]
+    """
     walk_curve: float
     """A curved walk's largest turn per tick: walk.curve times the tick (0: no curve). [rad]"""
     time_scale: float
@@ -210,6 +214,7 @@ PARAMETERS = (
     "seek_margin",
     "tick_us",
     "walk_turn_ticks",
+    "look_ticks",
     "walk_curve",
     "time_scale",
     "timeout_ticks",

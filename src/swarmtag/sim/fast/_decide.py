@@ -216,6 +216,25 @@ def _better(
 
 
 @inlined
+def _looked_round(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> bool:
+    """Whether robot ``n`` chooses now: its look round ends (``decide._look_round``).
+
+    Not looking, it begins to look if it has a candidate (and chooses nothing).
+    """
+    look = w.look[r, n]
+    if look < 0:
+        for j in range(x.seen_count[r, n]):
+            if _open(r, n, x.seen_list[r, n, j], t, w, k):
+                w.look[r, n] = t
+                break
+        return False
+    if t - look < k.look_ticks:
+        return False
+    w.look[r, n] = -1
+    return True
+
+
+@inlined
 def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
     """Choose among the candidates (``decide._selection`` with ``policy.select``'s tie rule).
 
@@ -229,6 +248,8 @@ def _select(r: int, n: int, t: int, w: World, k: Constants, x: Scratch) -> None:
         if _seen_at(r, n, sought, x) >= 0 and _open(r, n, sought, t, w, k):
             _approach(r, n, sought, w, k, x)
             w.seek[r, n] = -1
+        return
+    if k.look_ticks > 0 and not _looked_round(r, n, t, w, k, x):
         return
     best = -1
     best_score = 0.0

@@ -77,6 +77,7 @@ class World(NamedTuple):
     seek: I8
     seek_ref: F8
     curve: F8
+    look: I8
     carrier_pos: F8
     status: S1
     urgency: S1

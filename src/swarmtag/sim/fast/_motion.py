@@ -35,7 +35,11 @@ def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
             goal_x, goal_y = waypoint_of(px, py, w.destination[r, target], k)
             w.goal[r, n, 0] = goal_x
             w.goal[r, n, 1] = goal_y
-        if mode == Mode.WALK:
+        looking = k.look_ticks > 0 and mode == Mode.WALK and w.look[r, n] >= 0
+        if looking:  # stands and turns counter-clockwise
+            qx = px
+            qy = py
+        elif mode == Mode.WALK:
             qx = px + w.walk[r, n, 0] * speed
             qy = py + w.walk[r, n, 1] * speed
         elif mode == Mode.TRANSPORT and w.sidestep[r, n] > 0:
@@ -60,25 +64,45 @@ def move_robots(r: int, lo: int, hi: int, w: World, k: Constants, x: Scratch) ->
         x.proposed[r, n, 0] = qx
         x.proposed[r, n, 1] = qy
 
-        tx = qx - px
-        ty = qy - py
-        distance = math.sqrt(tx * tx + ty * ty)
-        if mode == Mode.PREDOCK:
-            fx = -nx
-            fy = -ny
-        elif mode == Mode.WALK:
-            fx = w.walk[r, n, 0]
-            fy = w.walk[r, n, 1]
-        else:
-            safe = distance if distance > 0 else 1.0
-            fx = tx / safe
-            fy = ty / safe
-        if mode in (Mode.PREDOCK, Mode.WALK) or (mode == Mode.TRANSPORT and distance > 0):
-            hx, hy = turn_towards(
-                w.heading[r, n, 0], w.heading[r, n, 1], fx, fy, k.turn_cos, k.turn_sin
-            )
-            w.heading[r, n, 0] = hx
-            w.heading[r, n, 1] = hy
+        _turn_heading(r, n, mode, looking, qx - px, qy - py, face, w, k)
+
+
+@inlined
+def _turn_heading(
+    r: int,
+    n: int,
+    mode: int,
+    looking: bool,
+    tx: float,
+    ty: float,
+    face: int,
+    w: World,
+    k: Constants,
+) -> None:
+    """Turn robot ``n``'s heading by a turn step towards where it faces (``motion.move``).
+
+    ``tx, ty``: its proposed move; ``face``: the face it approaches (PREDOCK).
+    """
+    distance = math.sqrt(tx * tx + ty * ty)
+    if mode == Mode.PREDOCK:
+        fx = -FACE_X[face]
+        fy = -FACE_Y[face]
+    elif looking:
+        fx = -w.heading[r, n, 1]
+        fy = w.heading[r, n, 0]
+    elif mode == Mode.WALK:
+        fx = w.walk[r, n, 0]
+        fy = w.walk[r, n, 1]
+    else:
+        safe = distance if distance > 0 else 1.0
+        fx = tx / safe
+        fy = ty / safe
+    if mode in (Mode.PREDOCK, Mode.WALK) or (mode == Mode.TRANSPORT and distance > 0):
+        hx, hy = turn_towards(
+            w.heading[r, n, 0], w.heading[r, n, 1], fx, fy, k.turn_cos, k.turn_sin
+        )
+        w.heading[r, n, 0] = hx
+        w.heading[r, n, 1] = hy
 
 
 @inlined

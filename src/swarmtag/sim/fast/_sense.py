@@ -363,31 +363,56 @@ def _sense_split_now(
             continue
         rx = w.robot_pos[r, n, 0]
         ry = w.robot_pos[r, n, 1]
-        if _out_of_sight(r, rx, ry, k, x):
+        if not _out_of_sight(r, rx, ry, k, x):
+            _camera_now(r, n, t, rx, ry, w, k, x)
+        if k.look_ticks > 0 and w.look[r, n] >= 0:
+            _looked(r, n, rx, ry, w, k, x)
+
+
+@inlined
+def _camera_now(
+    r: int, n: int, t: int, rx: float, ry: float, w: World, k: Constants, x: Scratch
+) -> None:
+    """Walking robot ``n``'s sightings of the obstacle carriers it heard awaiting (memory 0)."""
+    count = x.obstacle_count[r]
+    if k.obstacle_grid:
+        count = near(
+            r,
+            rx,
+            ry,
+            k.sight_reach,
+            k.sight_cell,
+            k.carrier_bits,
+            x.sight_start,
+            x.sight_items,
+            x.near_carriers,
+            False,
+        )
+    for j in range(count):
+        c = x.obstacles[r, x.near_carriers[r, j] if k.obstacle_grid else j]
+        if known_status(r, n, c, w, k) != TagStatus.AWAITING_PICKUP:
             continue
-        count = x.obstacle_count[r]
-        if k.obstacle_grid:
-            count = near(
-                r,
-                rx,
-                ry,
-                k.sight_reach,
-                k.sight_cell,
-                k.carrier_bits,
-                x.sight_start,
-                x.sight_items,
-                x.near_carriers,
-                False,
-            )
-        for j in range(count):
-            c = x.obstacles[r, x.near_carriers[r, j] if k.obstacle_grid else j]
-            if known_status(r, n, c, w, k) != TagStatus.AWAITING_PICKUP:
-                continue
-            ox = w.carrier_pos[r, c, 0] - rx
-            oy = w.carrier_pos[r, c, 1] - ry
-            distance = math.sqrt(ox * ox + oy * oy)
-            if distance <= _reach(r, n, c, ox, oy, distance, w, k, x):
-                _camera(r, n, c, t, ox, oy, w, k, x)
+        ox = w.carrier_pos[r, c, 0] - rx
+        oy = w.carrier_pos[r, c, 1] - ry
+        distance = math.sqrt(ox * ox + oy * oy)
+        if distance <= _reach(r, n, c, ox, oy, distance, w, k, x):
+            _camera(r, n, c, t, ox, oy, w, k, x)
+
+
+@inlined
+def _looked(r: int, n: int, rx: float, ry: float, w: World, k: Constants, x: Scratch) -> None:
+    """Robot ``n`` looking round knows what it saw since its look began (``sense.looked``).
+
+    Its known carriers become every carrier in the arena seen since tick
+    ``look``, at the distance from where it stands to where it saw each.
+    """
+    x.seen_count[r, n] = 0
+    look = w.look[r, n]
+    for c in range(k.carriers):
+        if w.seen_tick[r, n, c] >= look and w.present[r, c]:
+            dx = w.seen_pos[r, n, c, 0] - rx
+            dy = w.seen_pos[r, n, c, 1] - ry
+            _remember(r, n, c, math.sqrt(dx * dx + dy * dy), x)
 
 
 @inlined
@@ -433,6 +458,7 @@ def _sense_every_pair(
         rx = w.robot_pos[r, n, 0]
         ry = w.robot_pos[r, n, 1]
         x.seen_count[r, n] = 0
+        looking = k.look_ticks > 0 and w.mode[r, n] == Mode.WALK and w.look[r, n] >= 0
         for c in range(k.carriers):
             ox = w.carrier_pos[r, c, 0] - rx
             oy = w.carrier_pos[r, c, 1] - ry
@@ -464,7 +490,10 @@ def _sense_every_pair(
                 w.seen_tick[r, n, c] = t
             if k.split:  # with memory (without, _sense_split_now senses)
                 seen = w.seen_tick[r, n, c]
-                if seen >= 0 and t - seen <= k.memory_ticks and present:
+                recent = seen >= 0 and t - seen <= k.memory_ticks
+                if looking and seen >= w.look[r, n]:
+                    recent = True
+                if recent and present:
                     dx = w.seen_pos[r, n, c, 0] - rx
                     dy = w.seen_pos[r, n, c, 1] - ry
                     _remember(r, n, c, math.sqrt(dx * dx + dy * dy), x)

@@ -57,6 +57,10 @@ class ParamFields:
     """The tick in whole microseconds: tags advertise on this grid. [us]"""
     walk_turn_ticks: int
     """A walking robot turns its heading every so many ticks (0: never). [ticks]"""
+    look_ticks: int
+    """A robot that sees a candidate stands and turns this many ticks before choosing (0: no).
+    [ticks]
+    """
     walk_curve: float
     """A curved walk's largest turn per tick: walk.curve times the tick (0: no curve). [rad]"""
     time_scale: float
@@ -159,6 +163,10 @@ class ControllerFields:
     """A seeker tumbles when its tag's estimate exceeds the leg's least by this factor."""
     walk_turn_ticks: int
     """A walking robot turns its heading every so many ticks (0: never). [ticks]"""
+    look_ticks: int
+    """A robot that sees a candidate stands and turns this many ticks before choosing (0: no).
+    [ticks]
+    """
     walk_curve: float
     """A curved walk's largest turn per tick: walk.curve times the tick (0: no curve). [rad]"""
     timeout_ticks: int

@@ -107,6 +107,12 @@ def _walk_turn_ticks(scenario: Scenario) -> int:
     return max(1, seconds_to_ticks(interval, scenario.tick)) if interval > 0 else 0
 
 
+def _look_ticks(scenario: Scenario) -> int:
+    """Ticks of a look round before choosing (0: none)."""
+    look = scenario.camera.look_around
+    return max(1, seconds_to_ticks(look, scenario.tick)) if look > 0 else 0
+
+
 def _seek_margin(scenario: Scenario) -> float:
     """One standard deviation of a running RSSI estimate, as a factor (BLE-led search).
 
@@ -256,6 +262,14 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
         "ticks",
         "A walking robot turns its heading every so many ticks (0: never).",
         _walk_turn_ticks,
+        controller=True,
+    ),
+    KernelParameter(
+        "look_ticks",
+        int,
+        "ticks",
+        "A robot that sees a candidate stands and turns this many ticks before choosing (0: no).",
+        _look_ticks,
         controller=True,
     ),
     KernelParameter(

@@ -71,7 +71,7 @@ def sparse_tag_cache(scenario: Scenario) -> bool:
     """Whether the compiled kernel keeps ``scenario``'s robots' tag caches as short lists.
 
     Where the lists are exact (split perception with neither sighting memory,
-    BLE-led search nor the per-pair draws of advertisement loss and camera noise,
+    a look round, BLE-led search nor the per-pair draws of advertisement loss and camera noise,
     ``sim/fast/_tag_cache.py``) and pay: from ``SPARSE_FROM_PAIRS``
     robot-carrier pairs a run (a warehouse's carriers are its orders, so its
     dense caches grow with the run). The compiled backend's states then
@@ -84,6 +84,7 @@ def sparse_tag_cache(scenario: Scenario) -> bool:
         and realism.advertisement_loss == 0
         and realism.detection_noise == 0
         and scenario.camera.fade == 0
+        and scenario.camera.look_around == 0
         and not scenario.radio.search
     )
     return exact and scenario.robots * scenario.carriers >= SPARSE_FROM_PAIRS

@@ -124,6 +124,8 @@ class WorldState:
     curve: Float
     """(R, N, 2) a curved walk's turn per tick on the current leg as ``(cos, sin)``; ``(0, 0)``
     before the first is drawn."""
+    look: Int
+    """(R, N) the tick a walking robot began to look round (it stands and turns); -1 not."""
     # carriers and their tags
     carrier_pos: Float
     """(R, C, 2) centre, metres."""
@@ -399,6 +401,7 @@ def initial_state(
         seek=robots(-1),
         seek_ref=np.zeros((runs, n)),
         curve=np.zeros((runs, n, 2)),
+        look=robots(-1),
         carrier_pos=carrier_pos,
         status=status,
         urgency=urgency0.copy(),

@@ -9,7 +9,8 @@ centre, lift, release or are broken stand still. Headings turn at most one
 turn step per tick: a walking robot towards its walk direction, a moving
 transporter towards its travel direction, and in PREDOCK towards the
 carrier (the inward normal of the face); a docking robot already faces its
-carrier and keeps its heading.
+carrier and keeps its heading. A walking robot looking round before it
+chooses (``look``) stands and turns counter-clockwise by a turn step.
 
 Resolve (Jacobi): ``collision_iterations`` passes; each computes every
 overlap from the positions at the start of the pass, then moves every robot
@@ -89,6 +90,12 @@ def move(s: WorldState, params: Params) -> Float:
     sidestepping = (mode == Mode.TRANSPORT) & (s.sidestep > 0)
     towards = step_towards(pos, goal, speed)
     walked = pos + s.walk * speed[..., None]
+    walk_facing = s.walk
+    if params.look_ticks > 0:  # looking round: stand and turn counter-clockwise
+        looking = ((mode == Mode.WALK) & (s.look >= 0))[..., None]
+        walked = np.where(looking, pos, walked)
+        left = np.stack((-s.heading[..., 1], s.heading[..., 0]), axis=-1)
+        walk_facing = np.where(looking, left, s.walk)
     sidestep = pos + s.sidestep_dir * speed[..., None]
     proposed = np.where(
         (mode == Mode.WALK)[..., None],
@@ -104,7 +111,7 @@ def move(s: WorldState, params: Params) -> Float:
     facing = np.where(
         (mode == Mode.PREDOCK)[..., None],
         -normal,
-        np.where((mode == Mode.WALK)[..., None], s.walk, direction),
+        np.where((mode == Mode.WALK)[..., None], walk_facing, direction),
     )
     turning = (
         (mode == Mode.PREDOCK) | (mode == Mode.WALK) | ((mode == Mode.TRANSPORT) & (distance > 0))

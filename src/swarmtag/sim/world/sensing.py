@@ -25,6 +25,8 @@ the last status and urgency it heard per tag (its BLE cache). Two models:
   ``detection_radius`` is seen and heard (unless lost), every tick.
 
 The distance used for selection is from the robot to the known position.
+A robot looking round before it chooses (``camera.look_around``) knows
+what it saw since its look began (``looked``).
 With BLE-led search (``radio.search``) each heard advertisement also
 updates the robot's running distance estimate of that tag from its RSSI
 (``ranged``), which the controller uses for tags it has not seen.
@@ -59,6 +61,7 @@ __all__ = [
     "advertised",
     "advertising",
     "line_of_sight",
+    "looked",
     "ranged",
     "sense",
     "sensed_state",
@@ -249,6 +252,15 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     else:
         known = visible
         measured = distance if inputs.noise is None else length(offset + inputs.noise)
+    if params.look_ticks > 0:
+        known, measured = looked(
+            state,
+            seen_tick=seen_tick,
+            seen_pos=seen_pos,
+            known=known,
+            measured=measured,
+            params=params,
+        )
     return Senses(
         known=known,
         distance=measured,
@@ -259,6 +271,30 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         seen_pos=seen_pos,
         rssi=rssi,
     )
+
+
+def looked(
+    state: WorldState,
+    *,
+    seen_tick: Int,
+    seen_pos: Float,
+    known: NDArray[np.bool_],
+    measured: Float,
+    params: Params,
+) -> tuple[NDArray[np.bool_], Float]:
+    """``known`` and ``measured`` with what each robot looking round saw since it began.
+
+    A walking robot with ``look >= 0`` knows every carrier in the arena its
+    cameras saw since tick ``look`` (this tick's sightings included), at the
+    distance from where it stands to where it saw each (as with memory).
+    """
+    looking = ((state.look >= 0) & (state.mode == Mode.WALK))[..., None]
+    if not looking.any():
+        return known, measured
+    window = looking & (seen_tick >= state.look[..., None]) & state.present[:, None, :]
+    if params.memory_ticks == 0:
+        measured = np.where(looking, length(seen_pos - state.robot_pos[:, :, None, :]), measured)
+    return known | window, measured
 
 
 def ranged(
