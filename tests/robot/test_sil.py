@@ -90,6 +90,7 @@ def test_large_swarm_event_logs_are_identical(realism):
             ticks=800,
             camera={"range": 1.5, "fade": 1.0, "bearing": "dots", "look_around": 1.0},
         ),
+        scenario(3, 7, "paper-sim", ticks=800, camera={"range": 1.5, "memory": 20.0, "drift": 0.3}),
         scenario(
             3,
             7,
@@ -122,6 +123,7 @@ def test_large_swarm_event_logs_are_identical(realism):
         "camera-bearing",
         "curved-walk",
         "look-around",
+        "memory-drift",
         "ble-search",
         "ble-search-exact-memory",
     ],

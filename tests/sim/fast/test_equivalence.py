@@ -79,10 +79,11 @@ CASES = {
         PAPER,
         camera=Camera(range=1.5, fade=1.0, occlusion="carriers", bearing="dots", look_around=1.0),
     ),
+    "memory-drift": replace(PAPER, camera=Camera(range=1.5, memory=20.0, drift=0.3)),
     "look-around-memory-noise": replace(
         PAPER,
         ticks=900,
-        camera=Camera(range=1.2, memory=0.3, bearing="dots", look_around=0.8),
+        camera=Camera(range=1.2, memory=0.3, bearing="dots", look_around=0.8, drift=0.1),
         realism=Realism(detection_noise=0.03, advertisement_loss=0.2),
         walk=Walk(curve=90.0),
     ),
@@ -185,6 +186,7 @@ cameras = st.builds(
     fade=st.sampled_from([0.0, 0.0, 0.5, 1.5]),
     bearing=st.sampled_from(["uniform", "uniform", "dots"]),
     look_around=st.sampled_from([0.0, 0.0, 0.5]),
+    drift=st.sampled_from([0.0, 0.0, 0.2]),
 )
 realisms = st.builds(
     Realism,
@@ -242,6 +244,7 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         replace(LARGE, camera=Camera(range=1.0, fade=1.2, occlusion="carriers")),
         replace(LARGE, camera=Camera(range=1.2, fade=0.6, occlusion="carriers", bearing="dots")),
         replace(LARGE, camera=Camera(range=1.2, occlusion="carriers", look_around=1.0)),
+        replace(LARGE, camera=Camera(range=0.8, memory=3.0, drift=0.2), ticks=150),
         replace(LARGE, perception="disc", detection_radius=2.0),
         replace(LARGE, realism=Realism(advertisement_loss=0.2, detection_noise=0.02)),
         replace(LARGE, radio=Radio(range=0.8, interval=0.3)),  # the radio grid leaves tags out
@@ -258,6 +261,7 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
         "fade",
         "bearing",
         "look-around",
+        "drift",
         "disc",
         "realism",
         "short-radio",

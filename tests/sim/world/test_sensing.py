@@ -323,3 +323,37 @@ def test_a_look_round_finds_the_carrier_in_the_blind_wedge(look, expected):
         assert looking.robot_pos[0, 0].tolist() == [1.5, 2.0]
         assert looking.look[0, 0] == 1
         assert looking.heading[0, 0] == pytest.approx([-1.0, 0.0], abs=1e-9)  # 20 x 9 degrees
+
+
+@pytest.mark.parametrize("drift", [0.0, 0.2])
+def test_odometry_drift_blurs_a_remembered_position_as_the_robot_drives_on(drift):
+    from swarmtag.sim import RandomSource
+    from swarmtag.sim.world.sensing import sense, sensed_state
+
+    values = {"camera.range": 1.0, "camera.memory": 10.0, "camera.drift": drift}
+    params = split_params(**values, **{"radio.interval": 0.1})
+    scene = Scene.build(robots=[(1.0, 2.0)], carriers=[(1.8, 2.0)])
+    state = initial_state(params, [scene], np.array([0]))
+    source = RandomSource(params, seed=4, run_ids=[0])
+    first = sense(state, source.inputs(1), params)
+    assert first.known[0, 0, 0]
+    assert first.distance[0, 0, 0] == pytest.approx(0.8)  # seen now: no error yet
+    state = sensed_state(state, first)
+    state.robot_pos[0, 0] = (1.0, 3.5)  # drove 1.5 m on: out of sight, still remembered
+    later = sense(state, source.inputs(2), params)
+    assert later.known[0, 0, 0]
+    error = later.distance[0, 0, 0] - np.hypot(0.8, 1.5)
+    if drift:
+        moved = np.sqrt(1.5) * drift  # the error's standard deviation per axis
+        assert later.odometry[0, 0] == pytest.approx(source_numbers(8, 4, 2) * moved)
+        assert abs(error) > 1e-3
+    else:
+        assert later.odometry is None
+        assert error == pytest.approx(0.0, abs=1e-12)
+
+
+def source_numbers(stream, seed, tick):
+    """The odometry stream's numbers of run 0, robot 0 at ``tick`` (1-based)."""
+    from swarmtag.sim.model.randomness import stream as generator
+
+    return generator(seed, 0, stream).standard_normal((tick, 1, 2))[tick - 1, 0]

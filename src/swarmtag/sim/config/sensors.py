@@ -128,7 +128,11 @@ class Camera:
     > 0 (s) a walking robot that sees a candidate does not choose at once:
     it stands and turns in place (counter-clockwise at ``motion.turn_rate``)
     for that long so that its cameras sweep round, then chooses among every
-    carrier it saw meanwhile. With
+    carrier it saw meanwhile. ``drift`` (m per square root of a metre) is
+    the robot's odometry error: its estimate of where it is wanders off
+    by a random walk whose variance grows with the distance it drives, so
+    a remembered position (kept in the robot's own frame) blurs as the robot
+    moves on. With
     ``Scenario.perception_scaling = "arena"`` the kernel multiplies range
     and fade by ``Scenario.perception_factor``.
     """
@@ -162,6 +166,14 @@ class Camera:
         doc="Width of the detection ramp centred on range (0: a hard disc).",
         low=0.0,
         high=MAX_LENGTH,
+    )
+    drift: float = param(
+        0.0,
+        unit="m/√m",
+        doc="Odometry error of remembered positions per axis after 1 m driven (0: exact).",
+        low=0.0,
+        high=1.0,
+        kernel=Kernel("odometry_drift"),
     )
     look_around: float = param(
         0.0,

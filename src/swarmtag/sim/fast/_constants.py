@@ -115,6 +115,10 @@ class Constants(NamedTuple):
     """How long a robot remembers where it saw a carrier (0: not at all). (``camera.memory``)
     [ticks]
     """
+    odometry_drift: float
+    """Odometry error of remembered positions per axis after 1 m driven (0: exact).
+    (``camera.drift``)
+    """
     dock_ticks: int
     """Centring under the carrier. (``timing.dock``) [ticks]"""
     lift_ticks: int
@@ -236,6 +240,7 @@ PARAMETERS = (
     "rssi_smoothing",
     "occlusion",
     "memory_ticks",
+    "odometry_drift",
     "dock_ticks",
     "lift_ticks",
     "release_ticks",

@@ -78,6 +78,8 @@ class World(NamedTuple):
     seek_ref: F8
     curve: F8
     look: I8
+    odometry: F8
+    odometry_at: F8
     carrier_pos: F8
     status: S1
     urgency: S1

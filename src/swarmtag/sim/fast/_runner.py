@@ -137,32 +137,41 @@ class _Streams:
         self._rssi = (
             [stream(seed, run, Stream.RSSI) for run in run_ids] if rssi_on(params) else None
         )
+        self._odometry = (
+            [stream(seed, run, Stream.ODOMETRY) for run in run_ids]
+            if params.odometry_drift > 0
+            else None
+        )
         self._params = params
         self._runs = len(run_ids)
 
     @property
     def columns(self) -> int:
         """Numbers per robot and tick that ``outside`` holds (its last axis)."""
-        return 2 + (self._params.carriers if self._rssi is not None else 0)
+        return 4 + (self._params.carriers if self._rssi is not None else 0)
 
     def outside(self, ticks: int) -> np.ndarray:
         """The next ``ticks`` ticks' numbers drawn outside the kernel (``_tick.outside_row``).
 
         Shape (runs, ticks, robots, columns): each robot's walk turn
-        ``(cos, sin)``, then its RSSI error factor per carrier; one row of
-        zeros when there are none.
+        ``(cos, sin)``, its odometry numbers, then its RSSI error factor per
+        carrier; one row of zeros when there are none.
         """
         robots = self._params.robots
-        if self._walk is None and self._rssi is None:
-            return np.zeros((self._runs, 1, robots, 2))
+        if self._walk is None and self._rssi is None and self._odometry is None:
+            return np.zeros((self._runs, 1, robots, 4))
         numbers = np.zeros((self._runs, ticks, robots, self.columns))
         if self._walk is not None:
             uniform = np.stack([g.random((ticks, robots)) for g in self._walk])
             numbers[..., 0:2] = walk_turns(uniform, self._params)
+        if self._odometry is not None:
+            numbers[..., 2:4] = np.stack(
+                [g.standard_normal((ticks, robots, 2)) for g in self._odometry]
+            )
         if self._rssi is not None:
             shape = (ticks, robots, self._params.carriers)
             gaussians = np.stack([g.standard_normal(shape) for g in self._rssi])
-            numbers[..., 2:] = rssi_factors(gaussians, self._params)
+            numbers[..., 4:] = rssi_factors(gaussians, self._params)
         return numbers
 
 

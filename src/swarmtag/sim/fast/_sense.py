@@ -203,17 +203,57 @@ def _camera(
     if k.sparse_cache:  # no sighting memory, no noise: only the distance is needed
         _remember(r, n, c, math.sqrt(ox * ox + oy * oy), x)
         return
+    _sighting(r, n, c, t, w, k, x)
     if k.detection_noise > 0:
-        w.seen_pos[r, n, c, 0] = w.carrier_pos[r, c, 0] + x.noise[r, n, c, 0]
-        w.seen_pos[r, n, c, 1] = w.carrier_pos[r, c, 1] + x.noise[r, n, c, 1]
         dx = ox + x.noise[r, n, c, 0]
         dy = oy + x.noise[r, n, c, 1]
         _remember(r, n, c, math.sqrt(dx * dx + dy * dy), x)
     else:
-        w.seen_pos[r, n, c, 0] = w.carrier_pos[r, c, 0]
-        w.seen_pos[r, n, c, 1] = w.carrier_pos[r, c, 1]
         _remember(r, n, c, math.sqrt(ox * ox + oy * oy), x)
+
+
+@inlined
+def _sighting(r: int, n: int, c: int, t: int, w: World, k: Constants, x: Scratch) -> None:
+    """Robot ``n`` sees carrier ``c`` now: the tick, and where (noise, in its own frame)."""
+    sx = w.carrier_pos[r, c, 0]
+    sy = w.carrier_pos[r, c, 1]
+    if k.detection_noise > 0:
+        sx = sx + x.noise[r, n, c, 0]
+        sy = sy + x.noise[r, n, c, 1]
+    if k.odometry_drift > 0:
+        sx = sx + w.odometry[r, n, 0]
+        sy = sy + w.odometry[r, n, 1]
+    w.seen_pos[r, n, c, 0] = sx
+    w.seen_pos[r, n, c, 1] = sy
     w.seen_tick[r, n, c] = t
+
+
+@inlined
+def _remembered(r: int, n: int, c: int, rx: float, ry: float, w: World, k: Constants) -> float:
+    """Distance from where robot ``n`` believes it stands to where it saw carrier ``c``."""
+    if k.odometry_drift > 0:
+        rx = rx + w.odometry[r, n, 0]
+        ry = ry + w.odometry[r, n, 1]
+    dx = w.seen_pos[r, n, c, 0] - rx
+    dy = w.seen_pos[r, n, c, 1] - ry
+    return math.sqrt(dx * dx + dy * dy)
+
+
+@inlined
+def _drift(r: int, n: int, outside: np.ndarray, row: int, w: World, k: Constants) -> None:
+    """Robot ``n``'s odometry error grows with the metres it drove (``sense.drifted``).
+
+    Its Gaussian numbers are ``outside[r, row, n, 2:4]`` (the odometry stream).
+    """
+    px = w.robot_pos[r, n, 0]
+    py = w.robot_pos[r, n, 1]
+    mx = px - w.odometry_at[r, n, 0]
+    my = py - w.odometry_at[r, n, 1]
+    step = k.odometry_drift * math.sqrt(math.sqrt(mx * mx + my * my))  # drift * sqrt(metres)
+    w.odometry[r, n, 0] = w.odometry[r, n, 0] + outside[r, row, n, 2] * step
+    w.odometry[r, n, 1] = w.odometry[r, n, 1] + outside[r, row, n, 3] * step
+    w.odometry_at[r, n, 0] = px
+    w.odometry_at[r, n, 1] = py
 
 
 @inlined
@@ -233,13 +273,13 @@ def _heard(
     """Robot ``n`` hears tag ``c``: its cache and, with BLE-led search, its RSSI estimate.
 
     ``sense.ranged`` for one pair: the distance the RSSI implies (times this
-    tick's error factor, ``outside[r, row, n, 2 + c]``) starts the estimate
+    tick's error factor, ``outside[r, row, n, 4 + c]``) starts the estimate
     or moves it by ``rssi_smoothing``.
     """
     if k.radio_search:
         sample = distance
         if k.rssi_sigma > 0:
-            sample = distance * outside[r, row, n, 2 + c]
+            sample = distance * outside[r, row, n, 4 + c]
         if w.heard_tick[r, n, c] < 0:
             w.rssi[r, n, c] = sample
         else:
@@ -410,9 +450,7 @@ def _looked(r: int, n: int, rx: float, ry: float, w: World, k: Constants, x: Scr
     look = w.look[r, n]
     for c in range(k.carriers):
         if w.seen_tick[r, n, c] >= look and w.present[r, c]:
-            dx = w.seen_pos[r, n, c, 0] - rx
-            dy = w.seen_pos[r, n, c, 1] - ry
-            _remember(r, n, c, math.sqrt(dx * dx + dy * dy), x)
+            _remember(r, n, c, _remembered(r, n, c, rx, ry, w, k), x)
 
 
 @inlined
@@ -431,6 +469,9 @@ def sense_robots(
 
     ``outside[r, row]``: the tick's numbers drawn outside the kernel (``_tick.outside_row``).
     """
+    if k.odometry_drift > 0:
+        for n in range(lo, hi):
+            _drift(r, n, outside, row, w, k)
     if k.split and k.memory_ticks == 0:
         _sense_split_now(r, t, lo, hi, outside, row, w, k, x)
     else:
@@ -481,22 +522,14 @@ def _sense_every_pair(
             if k.split and k.occlusion > 0 and visible:
                 visible = _line_of_sight(r, n, c, w, k, x)
             if visible:
-                if noisy:
-                    w.seen_pos[r, n, c, 0] = w.carrier_pos[r, c, 0] + x.noise[r, n, c, 0]
-                    w.seen_pos[r, n, c, 1] = w.carrier_pos[r, c, 1] + x.noise[r, n, c, 1]
-                else:
-                    w.seen_pos[r, n, c, 0] = w.carrier_pos[r, c, 0]
-                    w.seen_pos[r, n, c, 1] = w.carrier_pos[r, c, 1]
-                w.seen_tick[r, n, c] = t
+                _sighting(r, n, c, t, w, k, x)
             if k.split:  # with memory (without, _sense_split_now senses)
                 seen = w.seen_tick[r, n, c]
                 recent = seen >= 0 and t - seen <= k.memory_ticks
                 if looking and seen >= w.look[r, n]:
                     recent = True
                 if recent and present:
-                    dx = w.seen_pos[r, n, c, 0] - rx
-                    dy = w.seen_pos[r, n, c, 1] - ry
-                    _remember(r, n, c, math.sqrt(dx * dx + dy * dy), x)
+                    _remember(r, n, c, _remembered(r, n, c, rx, ry, w, k), x)
             elif visible:
                 if noisy:
                     dx = ox + x.noise[r, n, c, 0]

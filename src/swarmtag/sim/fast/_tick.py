@@ -7,8 +7,8 @@ event buffer could overflow; the caller empties the buffers and calls again.
 It holds no GIL, so the caller runs groups of runs on several threads at
 once: runs share no memory. Random numbers come from each run's own
 generators, the very streams the reference draws (``RandomSource``), in the
-same order; the numbers drawn outside the kernel (the correlated walk's turns, the
-RSSI's error factors) come ready-made from the caller (``outside_row``).
+same order; the numbers drawn outside the kernel (the walk's turns, the odometry's
+numbers, the RSSI's error factors) come ready-made from the caller (``outside_row``).
 """
 
 from __future__ import annotations
@@ -63,15 +63,21 @@ def _end_of_tick(r: int, t: int, w: World, k: Constants) -> None:
 
 @inlined
 def outside_drawn(k: Constants) -> bool:
-    """Whether ticks have numbers drawn outside the kernel (walk turns, RSSI factors).
+    """Whether ticks have numbers drawn outside the kernel (turns, odometry, RSSI factors).
 
     Then ``outside[r, row, n]`` holds robot ``n``'s walk turn ``(cos, sin)``
     (a curved walk's turn per tick; zeros when the walk neither turns nor
-    curves) and, from column 2, its RSSI error
-    factor per carrier (with BLE-led search and shadowing); else ``outside``
-    has one row of zeros.
+    curves), in columns 2-3 its odometry stream's two Gaussian numbers
+    (zeros without drift) and, from column 4, its RSSI error factor per
+    carrier (with BLE-led search and shadowing); else ``outside`` has one
+    row of zeros.
     """
-    return k.walk_turn_ticks > 0 or k.walk_curve > 0 or (k.radio_search and k.rssi_sigma > 0)
+    return (
+        k.walk_turn_ticks > 0
+        or k.walk_curve > 0
+        or k.odometry_drift > 0
+        or (k.radio_search and k.rssi_sigma > 0)
+    )
 
 
 @inlined

@@ -113,6 +113,10 @@ class ParamFields:
     """How long a robot remembers where it saw a carrier (0: not at all). (``camera.memory``)
     [ticks]
     """
+    odometry_drift: float
+    """Odometry error of remembered positions per axis after 1 m driven (0: exact).
+    (``camera.drift``)
+    """
     dock_ticks: int
     """Centring under the carrier. (``timing.dock``) [ticks]"""
     lift_ticks: int

@@ -27,10 +27,13 @@ k   stream     draws
                the distance robot ``r`` reads from carrier ``c``'s RSSI is
                the true one times ``10 ** (g * rssi_sigma)`` (``rssi_factors``,
                outside every kernel like the walk's turns)
+8   odometry   per tick ``standard_normal((N, 2))``: with odometry drift,
+               robot ``r``'s odometry error grows by ``g * drift *
+               sqrt(moved)`` (``moved``: metres driven since last tick)
 ==  =========  =============================================================
 
 Every tick draws the full block of each stream, used or not, so no number
-depends on what other robots did. Streams 2-7 are only drawn when their
+depends on what other robots did. Streams 2-8 are only drawn when their
 option is on; being separate streams, switching one on changes no other
 number. Blocks for many ticks are drawn at once (``chunk``), which gives the
 same numbers as drawing tick by tick. A normalised direction is
@@ -83,6 +86,7 @@ class Stream(IntEnum):
     WALK = 5
     SIGHT = 6
     RSSI = 7
+    ODOMETRY = 8
 
 
 def check_seed(seed: object) -> int:
@@ -159,7 +163,8 @@ class TickInputs:
     ``sight`` (R, N, C) how far each robot sees each carrier this tick
     (``None``: ``camera_range``, a hard disc); ``rssi`` (R, N, C) the error
     factor of the distance each robot reads from each tag's RSSI (``None``:
-    exact, or no BLE-led search).
+    exact, or no BLE-led search); ``odometry`` (R, N, 2) the Gaussian
+    numbers of each robot's odometry error this tick (``None``: no drift).
     """
 
     walk: Float
@@ -170,6 +175,7 @@ class TickInputs:
     turn: Float | None = None
     sight: Float | None = None
     rssi: Float | None = None
+    odometry: Float | None = None
     writes: tuple[Reprioritisation, ...] = ()
 
     @classmethod
@@ -233,6 +239,8 @@ class RandomSource:
             self._purposes[Stream.SIGHT] = (n, c)
         if rssi_on(params):
             self._purposes[Stream.RSSI] = (n, c)
+        if params.odometry_drift > 0:
+            self._purposes[Stream.ODOMETRY] = (n, 2)
         if chunk is None:
             largest = max(int(np.prod(shape)) for shape in self._purposes.values())
             chunk = max(1, min(_MAX_CHUNK, _BLOCK_BYTES // (8 * largest)))
@@ -270,7 +278,7 @@ class RandomSource:
             self._first, row = tick, 0
         motion = self._blocks[Stream.MOTION][row]
         params = self._params
-        heard = noise = turn = sight = rssi = None
+        heard = noise = turn = sight = rssi = odometry = None
         breakdown = np.zeros(motion.shape[:2], dtype=bool)
         if Stream.BREAKDOWN in self._blocks:
             breakdown = self._blocks[Stream.BREAKDOWN][row] < params.breakdown
@@ -284,6 +292,8 @@ class RandomSource:
             sight = params.camera_far - self._blocks[Stream.SIGHT][row] * params.camera_fade
         if Stream.RSSI in self._blocks:
             rssi = rssi_factors(self._blocks[Stream.RSSI][row], params)
+        if Stream.ODOMETRY in self._blocks:
+            odometry = self._blocks[Stream.ODOMETRY][row]
         return TickInputs(
             walk=unit_vectors(motion[..., 0:2]),
             sidestep=unit_vectors(motion[..., 2:4]),
@@ -293,5 +303,6 @@ class RandomSource:
             turn=turn,
             sight=sight,
             rssi=rssi,
+            odometry=odometry,
             writes=due_writes(params, tick),
         )

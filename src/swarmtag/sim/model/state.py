@@ -126,6 +126,10 @@ class WorldState:
     before the first is drawn."""
     look: Int
     """(R, N) the tick a walking robot began to look round (it stands and turns); -1 not."""
+    odometry: Float
+    """(R, N, 2) the robot's odometry error: where it believes it is minus where it is."""
+    odometry_at: Float
+    """(R, N, 2) where the robot was when its odometry error last grew (the last tick)."""
     # carriers and their tags
     carrier_pos: Float
     """(R, C, 2) centre, metres."""
@@ -364,6 +368,7 @@ def initial_state(
     status = stack("status", np.int8).reshape(runs, c)
     urgency0 = stack("urgency0", np.int8).reshape(runs, c)
     heading = stack("heading", np.float64).reshape(runs, n, 2)
+    robot_pos = stack("robot_pos", np.float64).reshape(runs, n, 2)
     due = orders("due", 0, np.int64)
     present = due == 0
     slots = params.status_delay + 1
@@ -374,7 +379,7 @@ def initial_state(
     return WorldState(
         tick=0,
         run_ids=ids,
-        robot_pos=stack("robot_pos", np.float64).reshape(runs, n, 2),
+        robot_pos=robot_pos,
         heading=heading,
         walk=heading.copy(),
         speed=params.step * stack("speed_factor", np.float64).reshape(runs, n),
@@ -402,6 +407,8 @@ def initial_state(
         seek_ref=np.zeros((runs, n)),
         curve=np.zeros((runs, n, 2)),
         look=robots(-1),
+        odometry=np.zeros((runs, n, 2)),
+        odometry_at=robot_pos.copy(),
         carrier_pos=carrier_pos,
         status=status,
         urgency=urgency0.copy(),

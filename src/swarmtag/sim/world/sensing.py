@@ -60,6 +60,7 @@ __all__ = [
     "actionable",
     "advertised",
     "advertising",
+    "drifted",
     "line_of_sight",
     "looked",
     "ranged",
@@ -91,6 +92,8 @@ class Senses:
     """Where each robot last saw each carrier."""
     rssi: Float | None
     """Each robot's running RSSI distance estimate per tag after this tick (None: no search)."""
+    odometry: Float | None = None
+    """(R, N, 2) each robot's odometry error after this tick's growth (None: no drift)."""
 
 
 def advertised(state: WorldState, params: Params) -> tuple[NDArray[np.int8], NDArray[np.int8]]:
@@ -243,12 +246,17 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     seen = state.carrier_pos[:, None, :, :]
     if inputs.noise is not None:
         seen = seen + inputs.noise
+    odometry = drifted(state, inputs, params)
+    believed = state.robot_pos  # where each robot believes it stands
+    if odometry is not None:
+        seen = seen + odometry[:, :, None, :]  # a sighting is kept in the robot's own frame
+        believed = state.robot_pos + odometry
     seen_pos = np.where(visible[..., None], seen, state.seen_pos)
     seen_tick = np.where(visible, t, state.seen_tick)
     if params.split and params.memory_ticks > 0:
         known = (seen_tick >= 0) & (t - seen_tick <= params.memory_ticks)
         known &= present
-        measured = length(seen_pos - state.robot_pos[:, :, None, :])
+        measured = length(seen_pos - believed[:, :, None, :])
     else:
         known = visible
         measured = distance if inputs.noise is None else length(offset + inputs.noise)
@@ -256,7 +264,7 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         known, measured = looked(
             state,
             seen_tick=seen_tick,
-            seen_pos=seen_pos,
+            seen=(seen_pos, believed),
             known=known,
             measured=measured,
             params=params,
@@ -270,14 +278,30 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         seen_tick=seen_tick,
         seen_pos=seen_pos,
         rssi=rssi,
+        odometry=odometry,
     )
+
+
+def drifted(state: WorldState, inputs: TickInputs, params: Params) -> Float | None:
+    """(R, N, 2): the robots' odometry errors after the metres each drove since last tick.
+
+    A random walk: each axis grows by ``g * drift * sqrt(moved)``, ``g``
+    standard normal (the odometry stream), so its variance grows with the
+    distance driven. None without drift.
+    """
+    if params.odometry_drift <= 0 or inputs.odometry is None:
+        return None
+    moved = length(state.robot_pos - state.odometry_at)
+    step = params.odometry_drift * np.sqrt(moved)
+    error: Float = state.odometry + inputs.odometry * step[..., None]
+    return error
 
 
 def looked(
     state: WorldState,
     *,
     seen_tick: Int,
-    seen_pos: Float,
+    seen: tuple[Float, Float],
     known: NDArray[np.bool_],
     measured: Float,
     params: Params,
@@ -286,14 +310,16 @@ def looked(
 
     A walking robot with ``look >= 0`` knows every carrier in the arena its
     cameras saw since tick ``look`` (this tick's sightings included), at the
-    distance from where it stands to where it saw each (as with memory).
+    distance from where it stands to where it saw each (as with memory;
+    ``seen``: the sightings' positions and where the robots believe they stand).
     """
+    seen_pos, believed = seen
     looking = ((state.look >= 0) & (state.mode == Mode.WALK))[..., None]
     if not looking.any():
         return known, measured
     window = looking & (seen_tick >= state.look[..., None]) & state.present[:, None, :]
     if params.memory_ticks == 0:
-        measured = np.where(looking, length(seen_pos - state.robot_pos[:, :, None, :]), measured)
+        measured = np.where(looking, length(seen_pos - believed[:, :, None, :]), measured)
     return known | window, measured
 
 
@@ -325,4 +351,6 @@ def sensed_state(state: WorldState, senses: Senses) -> WorldState:
         seen_tick=senses.seen_tick,
         seen_pos=senses.seen_pos,
         rssi=copied.rssi if senses.rssi is None else senses.rssi,
+        odometry=copied.odometry if senses.odometry is None else senses.odometry,
+        odometry_at=copied.odometry_at if senses.odometry is None else state.robot_pos.copy(),
     )
