@@ -19,7 +19,8 @@ table (``--figure``, ``--table``; docs/reproduction/ by default) and the numbers
 benchmarks/results/ (``_results.py``). Usage:
 
     .venv/bin/python benchmarks/effect_map.py [--ranges 0.5,1,1.5,2,3,4]
-        [--mechanisms camera,memory,turning-walk,narrow-pickup,ble-search]
+        [--mechanisms camera,memory,turning-walk,narrow-pickup,ble-search,bearing,
+                      bearing+look,curved-walk,memory+drift]
         [--runs 64] [--seeds 1,2,3] [--quick] [--figure PNG] [--table MD] [--out JSON]
 
 --quick: ranges 1 and 3, the camera alone and BLE-led search, 16 runs, seed 1 (about a
@@ -56,6 +57,10 @@ MECHANISMS: dict[str, dict[str, object]] = {
     "turning-walk": {"walk.turn_interval": 2.0, "walk.turn_angle": 60.0},
     "narrow-pickup": {"arena.pickup_width": 1.0},
     "ble-search": {"radio.search": "true"},
+    "bearing": {"camera.bearing": "dots"},
+    "bearing+look": {"camera.bearing": "dots", "camera.look_around": 2.0},
+    "curved-walk": {"walk.curve": 90.0},
+    "memory+drift": {"camera.memory": 60, "camera.drift": 0.1},
 }
 """Each mechanism's settings on top of the common ones (docs/reproduction.md says what each is)."""
 COMMON: dict[str, object] = {

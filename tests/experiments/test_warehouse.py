@@ -112,7 +112,7 @@ def test_the_shipped_warehouse_study():
     assert shapes == [("small", 6, 36000, "s"), ("hall", 36, 36000, "s")]
     warehouses = [s.scenario.warehouse for s in study.scales]
     assert [(w.map, w.order_interval, w.warmup) for w in warehouses if w is not None] == [
-        ("small-warehouse", 60.0, 600.0),
+        ("small-warehouse", 45.0, 600.0),
         ("warehouse-hall", 20.0, 600.0),
     ]
     assert [s.kpi_warmup("s") for s in study.scales] == [6000 * 0.1] * 2

@@ -97,7 +97,7 @@ def test_large_swarm_event_logs_are_identical(realism):
             "lab",
             ticks=900,
             urgency={"model": "static"},
-            camera={"range": 1.0},
+            camera={"range": 1.0, "look_around": 0.0},
             radio={"search": True},
             walk={"turn_interval": 1.0, "turn_angle": 40.0},
             motion={"speed": 0.5},

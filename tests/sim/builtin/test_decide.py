@@ -318,7 +318,7 @@ def test_a_walk_cannot_both_turn_and_curve():
 
 def _searching(camera: float, search: bool) -> Scenario:
     mapping = Scenario.default(3, 7, profile="lab").to_mapping()
-    mapping["camera"] |= {"range": camera, "occlusion": "carriers"}
+    mapping["camera"] |= {"range": camera, "occlusion": "carriers", "look_around": 0.0}
     mapping["radio"] = mapping.get("radio", {}) | {"search": search}
     mapping["motion"] |= {"speed": 0.5}
     mapping["urgency"] = {"model": "static"}

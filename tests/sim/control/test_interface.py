@@ -35,6 +35,8 @@ WORLD_ROBOT_FIELDS = (
     "seen_tick",
     "seen_pos",
     "rssi",
+    "odometry",
+    "odometry_at",
 )
 """Robot fields the world keeps: bodies, perception, the carrier a robot may overlap."""
 

@@ -24,10 +24,10 @@ POLICY = Urgency(alpha=0.7)
 
 
 def _hall(ticks: int = 1800, interval: float = 3.0, **realism: float) -> Scenario:
-    """The lab robots in the hall, with a hard-disc camera and no BLE search (lists are exact)."""
+    """The lab robots in the hall, a hard-disc camera choosing at once (lists are exact)."""
     part = {"map": "warehouse-hall", "order_interval": interval, "initial_orders": 20}
     layers = {"robots": 30, "ticks": ticks, "warehouse": part}
-    layers |= {"camera": {"fade": 0.0}, "radio": {"search": False}}
+    layers |= {"camera": {"fade": 0.0, "look_around": 0.0}, "radio": {"search": False}}
     scenario = load_profile("lab").scenario(layers)
     return replace(scenario, realism=Realism(**realism)) if realism else scenario
 
