@@ -12,6 +12,7 @@ import swarmtag.policy
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "policy.md"
 PUBLIC = {
+    "CATALOGUE",
     "PROXIMITY_KIND",
     "PROXIMITY_RANGE",
     "URGENCY_KIND",
@@ -20,6 +21,7 @@ PUBLIC = {
     "Candidate",
     "Policy",
     "Proximity",
+    "RuleInfo",
     "Urgency",
     "Weighted",
     "choose",
@@ -55,6 +57,7 @@ def test_public_objects_have_docstrings(name):
         "swarmtag.policy._names",
         "swarmtag.policy._select",
         "swarmtag.policy._choose",
+        "swarmtag.policy._catalogue",
     ],
 )
 def test_module_doctests(module):

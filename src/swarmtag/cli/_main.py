@@ -15,6 +15,7 @@ from swarmtag.cli.calibrate import calibrate_cmd
 from swarmtag.cli.demo import demo
 from swarmtag.cli.log import log_group
 from swarmtag.cli.metrics import metrics
+from swarmtag.cli.policies import policies_cmd
 from swarmtag.cli.profiles import profiles_cmd
 from swarmtag.cli.robot import robot
 from swarmtag.cli.simulate import simulate_cmd
@@ -60,6 +61,7 @@ app.add_command(log_group)
 app.add_command(simulate_cmd)
 app.add_command(study)
 app.add_command(reproduce)
+app.add_command(policies_cmd)
 app.add_command(profiles_cmd)
 app.add_command(calibrate_cmd)
 app.add_command(robot)

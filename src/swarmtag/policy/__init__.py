@@ -19,6 +19,7 @@ Urgency(alpha=0.7)
 
 from __future__ import annotations
 
+from swarmtag.policy._catalogue import CATALOGUE, RuleInfo
 from swarmtag.policy._choose import Candidate, choose
 from swarmtag.policy._kernel import PROXIMITY_KIND, URGENCY_KIND, WEIGHTED_KIND, kernel_score
 from swarmtag.policy._names import parse_policy
@@ -27,6 +28,7 @@ from swarmtag.policy._select import select
 from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE, proximity_term
 
 __all__ = [
+    "CATALOGUE",
     "PROXIMITY_KIND",
     "PROXIMITY_RANGE",
     "URGENCY_KIND",
@@ -35,6 +37,7 @@ __all__ = [
     "Candidate",
     "Policy",
     "Proximity",
+    "RuleInfo",
     "Urgency",
     "Weighted",
     "choose",

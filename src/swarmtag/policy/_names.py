@@ -11,14 +11,12 @@ import re
 from typing import Final
 
 from swarmtag.errors import PolicyError
+from swarmtag.policy._catalogue import CATALOGUE, accepted_forms
 from swarmtag.policy._policies import Policy, Proximity, Urgency, Weighted
 
 __all__ = ["parse_policy"]
 
-_ACCEPTED: Final = (
-    "accepted forms: 'proximity', 'urgency:alpha=A' (A a finite number > 0), "
-    "'weighted:w=W' (0 <= W <= 1)"
-)
+_ACCEPTED: Final = accepted_forms()
 _NAME: Final = re.compile(
     r"""\s*(?P<kind>[A-Za-z]+)\s*
         (?: :\s*(?P<param>[A-Za-z]+)\s*=\s*(?P<value>\S+?)\s* )?""",
@@ -26,7 +24,7 @@ _NAME: Final = re.compile(
 )
 # Decimal numbers as ``repr(float)`` writes them, plus integers: 0.7, 3, 1e-05, 1.5E+16.
 _NUMBER: Final = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-_PARAMETER: Final = {"urgency": "alpha", "weighted": "w"}
+_PARAMETER: Final = {info.name: info.parameter for info in CATALOGUE if info.parameter}
 
 
 def parse_policy(name: str) -> Policy:
