@@ -8,9 +8,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from swarmtag.policy import (
+    EDF_KIND,
     PROXIMITY_KIND,
     URGENCY_KIND,
     WEIGHTED_KIND,
+    Edf,
     Proximity,
     Urgency,
     Weighted,
@@ -19,6 +21,7 @@ from swarmtag.policy import (
 
 policies = st.one_of(
     st.just(Proximity()),
+    st.just(Edf()),
     st.builds(Urgency, alpha=st.floats(1e-6, 1e6, allow_nan=False)),
     st.builds(Weighted, w=st.floats(0.0, 1.0)),
 )
@@ -29,6 +32,7 @@ def test_kernel_forms():
     assert Proximity().kernel_form == (PROXIMITY_KIND, 0.0)
     assert Urgency(alpha=0.7).kernel_form == (URGENCY_KIND, 0.7)
     assert Weighted(w=0.3).kernel_form == (WEIGHTED_KIND, 0.3)
+    assert Edf().kernel_form == (EDF_KIND, 0.0)
 
 
 @given(policy=policies, urgency=st.integers(0, 9), distance=distances)
@@ -45,7 +49,7 @@ def test_compiled_kernel_score_agrees():
     rng = np.random.default_rng(0)
     urgency = rng.integers(0, 10, 2000).astype(np.float64)
     distance = rng.random(2000) * 6.0
-    for policy in (Proximity(), Urgency(alpha=0.7), Urgency(alpha=9.0), Weighted(w=0.3)):
+    for policy in (Proximity(), Urgency(alpha=0.7), Urgency(alpha=9.0), Weighted(w=0.3), Edf()):
         kind, parameter = policy.kernel_form
         expected = policy.score(urgency, distance)
         got = np.array(

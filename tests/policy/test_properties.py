@@ -9,7 +9,16 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from swarmtag.policy import Candidate, Proximity, Urgency, Weighted, choose, parse_policy, select
+from swarmtag.policy import (
+    Candidate,
+    Edf,
+    Proximity,
+    Urgency,
+    Weighted,
+    choose,
+    parse_policy,
+    select,
+)
 
 # A few round distances make exact score ties (and equal distances) common.
 DISTANCES = st.one_of(
@@ -18,6 +27,7 @@ DISTANCES = st.one_of(
 )
 POLICIES = st.one_of(
     st.just(Proximity()),
+    st.just(Edf()),
     st.sampled_from([0.3, 0.5, 0.7, 0.9, 2.25, 3.0, 9.0]).map(Urgency),
     st.floats(min_value=1e-3, max_value=1e3).map(Urgency),
     st.sampled_from([0.0, 0.3, 0.5, 1.0]).map(Weighted),

@@ -13,12 +13,14 @@ import swarmtag.policy
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "policy.md"
 PUBLIC = {
     "CATALOGUE",
+    "EDF_KIND",
     "PROXIMITY_KIND",
     "PROXIMITY_RANGE",
     "URGENCY_KIND",
     "URGENCY_SCALE",
     "WEIGHTED_KIND",
     "Candidate",
+    "Edf",
     "Policy",
     "Proximity",
     "RuleInfo",

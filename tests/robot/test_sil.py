@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from swarmtag.errors import ConfigError
-from swarmtag.policy import Proximity, Urgency, Weighted
+from swarmtag.policy import Edf, Proximity, Urgency, Weighted
 from swarmtag.sim import Scenario, simulate
 from tests.robot.helpers import REALISM, differing_runs, scenario
 
@@ -44,7 +44,7 @@ def _compare(world: Scenario, runs: int, policies: list) -> dict[str, list[int]]
     return found
 
 
-POLICIES = [Urgency(alpha=0.7), Proximity(), Weighted(w=0.3), Urgency(alpha=2.0)]
+POLICIES = [Urgency(alpha=0.7), Proximity(), Weighted(w=0.3), Urgency(alpha=2.0), Edf()]
 
 
 @pytest.mark.parametrize("realism", [False, True], ids=["realism-off", "realism-on"])

@@ -4,7 +4,8 @@ A robot scores every available carrier it detects and fetches the best one:
 
 - ``Proximity()`` scores ``u_d = 9 * (1 - min(d / 3.6, 1))`` (nearest wins);
 - ``Urgency(alpha)`` scores ``u_c * (alpha + u_d)``;
-- ``Weighted(w)`` scores ``w * u_c + (1 - w) * u_d``.
+- ``Weighted(w)`` scores ``w * u_c + (1 - w) * u_d``;
+- ``Edf()`` scores ``u_c`` (earliest deadline first: urgency alone).
 
 Exact ties go to the smaller distance, then the smaller marker id. The
 simulator calls ``select`` on ``(runs, robots, carriers)`` arrays; the
@@ -21,20 +22,28 @@ from __future__ import annotations
 
 from swarmtag.policy._catalogue import CATALOGUE, RuleInfo
 from swarmtag.policy._choose import Candidate, choose
-from swarmtag.policy._kernel import PROXIMITY_KIND, URGENCY_KIND, WEIGHTED_KIND, kernel_score
+from swarmtag.policy._kernel import (
+    EDF_KIND,
+    PROXIMITY_KIND,
+    URGENCY_KIND,
+    WEIGHTED_KIND,
+    kernel_score,
+)
 from swarmtag.policy._names import parse_policy
-from swarmtag.policy._policies import Policy, Proximity, Urgency, Weighted
+from swarmtag.policy._policies import Edf, Policy, Proximity, Urgency, Weighted
 from swarmtag.policy._select import select
 from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE, proximity_term
 
 __all__ = [
     "CATALOGUE",
+    "EDF_KIND",
     "PROXIMITY_KIND",
     "PROXIMITY_RANGE",
     "URGENCY_KIND",
     "URGENCY_SCALE",
     "WEIGHTED_KIND",
     "Candidate",
+    "Edf",
     "Policy",
     "Proximity",
     "RuleInfo",

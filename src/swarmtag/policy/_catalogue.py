@@ -67,6 +67,16 @@ CATALOGUE: Final[tuple[RuleInfo, ...]] = (
         communication=False,
     ),
     RuleInfo(
+        name="edf",
+        kind="score",
+        definition="u_c: earliest deadline first, the most urgent carrier; ties to the nearer",
+        parameter=None,
+        allowed="",
+        reference="Liu and Layland, J. ACM 1973; here the ablation of urgency alone",
+        backends=_EVERYWHERE,
+        communication=False,
+    ),
+    RuleInfo(
         name="weighted",
         kind="score",
         definition="w * u_c + (1 - w) * u_d: 0 ranks like proximity, 1 by urgency alone",

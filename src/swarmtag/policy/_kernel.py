@@ -14,7 +14,7 @@ from typing import Final
 
 from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE
 
-__all__ = ["PROXIMITY_KIND", "URGENCY_KIND", "WEIGHTED_KIND", "kernel_score"]
+__all__ = ["EDF_KIND", "PROXIMITY_KIND", "URGENCY_KIND", "WEIGHTED_KIND", "kernel_score"]
 
 PROXIMITY_KIND: Final = 0
 """``kernel_form`` kind of ``Proximity`` (parameter unused)."""
@@ -22,6 +22,8 @@ URGENCY_KIND: Final = 1
 """``kernel_form`` kind of ``Urgency`` (parameter: alpha)."""
 WEIGHTED_KIND: Final = 2
 """``kernel_form`` kind of ``Weighted`` (parameter: w)."""
+EDF_KIND: Final = 3
+"""``kernel_form`` kind of ``Edf`` (parameter unused)."""
 
 
 def kernel_score(kind: int, parameter: float, urgency: float, distance: float) -> float:
@@ -30,6 +32,8 @@ def kernel_score(kind: int, parameter: float, urgency: float, distance: float) -
     >>> kernel_score(URGENCY_KIND, 0.5, 4.0, 1.8)
     20.0
     """
+    if kind == EDF_KIND:
+        return urgency
     term = distance / PROXIMITY_RANGE
     term = min(term, 1.0)  # np.minimum(term, 1.0): term unless 1.0 is smaller
     term = URGENCY_SCALE * (1.0 - term)

@@ -12,7 +12,7 @@ from typing import Final
 
 from swarmtag.errors import PolicyError
 from swarmtag.policy._catalogue import CATALOGUE, accepted_forms
-from swarmtag.policy._policies import Policy, Proximity, Urgency, Weighted
+from swarmtag.policy._policies import Edf, Policy, Proximity, Urgency, Weighted
 
 __all__ = ["parse_policy"]
 
@@ -25,6 +25,8 @@ _NAME: Final = re.compile(
 # Decimal numbers as ``repr(float)`` writes them, plus integers: 0.7, 3, 1e-05, 1.5E+16.
 _NUMBER: Final = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _PARAMETER: Final = {info.name: info.parameter for info in CATALOGUE if info.parameter}
+_PLAIN: Final[dict[str, type[Policy]]] = {"proximity": Proximity, "edf": Edf}
+"""The rules without a parameter, by name."""
 
 
 def parse_policy(name: str) -> Policy:
@@ -49,10 +51,11 @@ def parse_policy(name: str) -> Policy:
         raise PolicyError(msg)
     kind = match["kind"].lower()
     param = match["param"]
-    if kind == "proximity":
+    plain = _PLAIN.get(kind)
+    if plain is not None:
         if param is None:
-            return Proximity()
-        msg = f"condition name: proximity takes no parameter, got {name!r}; {_ACCEPTED}"
+            return plain()
+        msg = f"condition name: {kind} takes no parameter, got {name!r}; {_ACCEPTED}"
         raise PolicyError(msg)
     expected = _PARAMETER.get(kind)
     if expected is None:

@@ -17,10 +17,10 @@ import numpy as np
 import numpy.typing as npt
 
 from swarmtag.errors import PolicyError
-from swarmtag.policy._kernel import PROXIMITY_KIND, URGENCY_KIND, WEIGHTED_KIND
+from swarmtag.policy._kernel import EDF_KIND, PROXIMITY_KIND, URGENCY_KIND, WEIGHTED_KIND
 from swarmtag.policy._terms import as_float_array, formula, wrap_result
 
-__all__ = ["Policy", "Proximity", "Urgency", "Weighted"]
+__all__ = ["Edf", "Policy", "Proximity", "Urgency", "Weighted"]
 
 
 def _real(name: str, value: object, allowed: str) -> float:
@@ -204,3 +204,33 @@ class Weighted(Policy):
         np.multiply(1.0 - self.w, result, out=result)
         np.add(self.w * urgency, result, out=result)
         return result
+
+
+@dataclass(frozen=True, slots=True)
+class Edf(Policy):
+    """Earliest deadline first: score ``u_c``, the most urgent carrier; distance breaks ties.
+
+    Urgency alone, the ablation of the distance term (Liu and Layland, J. ACM
+    1973, for the rule): a carrier's urgency stands for how soon it is due.
+
+    >>> Edf().name
+    'edf'
+    >>> float(Edf().score(4, 1.8))
+    4.0
+    """
+
+    @property
+    def name(self) -> str:
+        """Canonical condition name: ``edf``."""
+        return "edf"
+
+    @property
+    def kernel_form(self) -> tuple[int, float]:
+        """``(EDF_KIND, 0.0)``."""
+        return EDF_KIND, 0.0
+
+    def _formula(
+        self, urgency: npt.NDArray[np.float64], distance: npt.NDArray[np.float64]
+    ) -> npt.NDArray[np.float64]:
+        del distance  # ties only (select's rule), never the score
+        return np.array(urgency, dtype=np.float64)

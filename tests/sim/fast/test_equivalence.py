@@ -16,7 +16,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from swarmtag.policy import Proximity, Urgency, Weighted
+from swarmtag.policy import Edf, Proximity, Urgency, Weighted
 from swarmtag.sim import (
     Camera,
     Motion,
@@ -271,3 +271,9 @@ LARGE = replace(Scenario.default(120, 128), ticks=200)
 )
 def test_large_swarms_agree(scenario):
     compare(scenario, Urgency(alpha=3.0), seed=21, runs=2)
+
+
+@pytest.mark.parametrize("case", ["paper-sim", "camera-bearing", "look-around"])
+def test_earliest_deadline_first_agrees(case):
+    result = compare(CASES[case], Edf(), seed=7, runs=3)
+    assert result.delivered.sum() > 0
