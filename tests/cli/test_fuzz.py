@@ -101,6 +101,7 @@ NORMAL_EXAMPLES = {
     ("study", "report"): 110,
     ("reproduce",): 100,
     ("profiles",): 150,
+    ("policies",): 20,
     ("calibrate",): 250,
     ("demo",): 8,
     ("robot", "tree"): 40,
