@@ -168,14 +168,20 @@ def _steer(behaviour: RobotBehaviour) -> None:
             return
         memory.walk_clock += 1
         if memory.walk_clock >= config.walk_turn_ticks:
-            x, y = memory.walk[0], memory.walk[1]
-            c, n = draws.turn[0], draws.turn[1]
-            rx = x * c - y * n
-            ry = x * n + y * c
-            norm = np.sqrt(rx * rx + ry * ry)
-            memory.walk = np.array([rx / norm, ry / norm])
-            io.walk(memory.walk)
+            _turn_walk(behaviour, draws.turn)
             memory.walk_clock = 0
+
+
+def _turn_walk(behaviour: RobotBehaviour, turn: Float) -> None:
+    """Rotate the walk direction by ``turn`` ``(cos, sin)``, renormalised, and drive along it."""
+    memory = behaviour.memory
+    x, y = memory.walk[0], memory.walk[1]
+    c, n = turn[0], turn[1]
+    rx = x * c - y * n
+    ry = x * n + y * c
+    norm = np.sqrt(rx * rx + ry * ry)
+    memory.walk = np.array([rx / norm, ry / norm])
+    behaviour.io.walk(memory.walk)
 
 
 def _curve(behaviour: RobotBehaviour, turn: Float, *, fresh: bool, seeking: bool) -> None:
@@ -183,19 +189,13 @@ def _curve(behaviour: RobotBehaviour, turn: Float, *, fresh: bool, seeking: bool
 
     ``decide._curve_walk`` for one robot; a seeker keeps its heading between hearings.
     """
-    io, memory = behaviour.io, behaviour.memory
+    memory = behaviour.memory
     unset = memory.curve[0] == 0 and memory.curve[1] == 0
     if fresh or (unset and not seeking):
         memory.curve = np.array(turn, dtype=np.float64)
     if fresh or seeking:
         return
-    x, y = memory.walk[0], memory.walk[1]
-    c, n = memory.curve[0], memory.curve[1]
-    rx = x * c - y * n
-    ry = x * n + y * c
-    norm = np.sqrt(rx * rx + ry * ry)
-    memory.walk = np.array([rx / norm, ry / norm])
-    io.walk(memory.walk)
+    _turn_walk(behaviour, memory.curve)
 
 
 class SelectCarrier(RobotBehaviour):

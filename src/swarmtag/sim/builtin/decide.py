@@ -244,18 +244,28 @@ def _seek_tumbles(
     return tumble
 
 
+def _rotated(walk: Float, turn: Float, rotating: NDArray[np.bool_]) -> Float:
+    """``walk`` rotated by ``turn`` ``(cos, sin)``, renormalised, where ``rotating``.
+
+    The rotation is ``(x c - y s, x s + y c)``; elsewhere the values are not
+    meant to be used (a robot not rotating may have no turn yet).
+    """
+    x, y = walk[..., 0], walk[..., 1]
+    c, n = turn[..., 0], turn[..., 1]
+    rx = x * c - y * n
+    ry = x * n + y * c
+    norm = np.where(rotating, np.sqrt(rx * rx + ry * ry), 1.0)
+    rotated: Float = np.stack((rx / norm, ry / norm), axis=-1)
+    return rotated
+
+
 def _turn_walk(s: WorldState, walking: NDArray[np.bool_], turn: Float, every: int) -> None:
     """Rotate the walk direction of robots that kept it for ``every`` ticks by ``turn``."""
     s.walk_clock[walking] += 1
     due = walking & (s.walk_clock >= every)
     if not due.any():
         return
-    x, y = s.walk[..., 0], s.walk[..., 1]
-    c, n = turn[..., 0], turn[..., 1]
-    rx = x * c - y * n
-    ry = x * n + y * c
-    norm = np.sqrt(rx * rx + ry * ry)
-    np.copyto(s.walk, np.stack((rx / norm, ry / norm), axis=-1), where=due[..., None])
+    np.copyto(s.walk, _rotated(s.walk, turn, due), where=due[..., None])
     s.walk_clock[due] = 0
 
 
@@ -272,12 +282,7 @@ def _curve_walk(
     rotating = turning & ~fresh
     if not rotating.any():
         return
-    x, y = s.walk[..., 0], s.walk[..., 1]
-    c, n = s.curve[..., 0], s.curve[..., 1]
-    rx = x * c - y * n
-    ry = x * n + y * c
-    norm = np.where(rotating, np.sqrt(rx * rx + ry * ry), 1.0)  # others may have no turn yet
-    np.copyto(s.walk, np.stack((rx / norm, ry / norm), axis=-1), where=rotating[..., None])
+    np.copyto(s.walk, _rotated(s.walk, s.curve, rotating), where=rotating[..., None])
 
 
 def decide(

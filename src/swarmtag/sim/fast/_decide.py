@@ -295,10 +295,14 @@ def _curve(
         w.curve[r, n, 1] = outside[r, row, n, 1]
     if fresh or seeking:
         return
+    _rotate_walk(r, n, w.curve[r, n, 0], w.curve[r, n, 1], w)
+
+
+@inlined
+def _rotate_walk(r: int, n: int, c: float, s: float, w: World) -> None:
+    """Rotate robot ``n``'s walk direction by ``(c, s)``, renormalised (``decide._rotated``)."""
     hx = w.walk[r, n, 0]
     hy = w.walk[r, n, 1]
-    c = w.curve[r, n, 0]
-    s = w.curve[r, n, 1]
     rx = hx * c - hy * s
     ry = hx * s + hy * c
     length = math.sqrt(rx * rx + ry * ry)
@@ -337,15 +341,7 @@ def _directions(
         if walking and not fresh and not seeking:
             w.walk_clock[r, n] += 1
             if w.walk_clock[r, n] >= k.walk_turn_ticks:
-                hx = w.walk[r, n, 0]
-                hy = w.walk[r, n, 1]
-                c = outside[r, row, n, 0]
-                s = outside[r, row, n, 1]
-                rx = hx * c - hy * s
-                ry = hx * s + hy * c
-                length = math.sqrt(rx * rx + ry * ry)
-                w.walk[r, n, 0] = rx / length
-                w.walk[r, n, 1] = ry / length
+                _rotate_walk(r, n, outside[r, row, n, 0], outside[r, row, n, 1], w)
                 w.walk_clock[r, n] = 0
         if fresh:
             w.walk_clock[r, n] = 0
