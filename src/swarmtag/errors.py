@@ -40,11 +40,16 @@ what to do instead.
     ├── OutputError (ValueError)            an output path is refused (names the option and path)
     ├── ResourceError (ValueError)          the work asked for cannot fit (says estimate and limit)
     └── PerceptionError (ValueError)        a camera image, camera file or marker input is refused
+
+``BackendFallback`` (a ``UserWarning``) says a run went to another backend
+than the one asked for or the default (a rule the compiled kernel cannot run);
+the command line prints it as one ``swarmtag: note:`` line.
 """
 
 from __future__ import annotations
 
 __all__ = [
+    "BackendFallback",
     "BagError",
     "CalibrationError",
     "ConfigError",
@@ -252,3 +257,7 @@ class ResourceError(SwarmtagError, ValueError):
 
 class PerceptionError(SwarmtagError, ValueError):
     """A camera image, camera file or marker input cannot be used; the message names it."""
+
+
+class BackendFallback(UserWarning):
+    """A run goes to the reference backend because the chosen one cannot run its rule."""

@@ -102,6 +102,7 @@ NORMAL_EXAMPLES = {
     ("reproduce",): 100,
     ("profiles",): 150,
     ("policies",): 20,
+    ("policy", "check"): 20,
     ("calibrate",): 250,
     ("demo",): 8,
     ("robot", "tree"): 40,
@@ -115,7 +116,7 @@ NORMAL_EXAMPLES = {
     ("aruco", "render"): 50,
     ("aruco", "detect"): 50,
 }
-"""Invocations per command in the normal suite (2,463 in all)."""
+"""Invocations per command in the normal suite (2,483 in all)."""
 TOTAL = int(os.environ.get("SWARMTAG_FUZZ_EXAMPLES", "0")) or sum(NORMAL_EXAMPLES.values())
 """Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``."""
 HANG_SECONDS = 60

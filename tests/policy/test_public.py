@@ -13,9 +13,11 @@ import swarmtag.policy
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "policy.md"
 PUBLIC = {
     "CATALOGUE",
+    "CONTEXT",
     "EDF_KIND",
     "PROXIMITY_KIND",
     "PROXIMITY_RANGE",
+    "RULE_GROUP",
     "URGENCY_KIND",
     "URGENCY_SCALE",
     "WEIGHTED_KIND",
@@ -23,13 +25,21 @@ PUBLIC = {
     "Edf",
     "Policy",
     "Proximity",
+    "RuleCheck",
     "RuleInfo",
+    "ScoreRule",
     "Urgency",
     "Weighted",
+    "check_rule",
     "choose",
     "kernel_score",
+    "load_checked_rule",
+    "load_rule",
     "parse_policy",
     "proximity_term",
+    "register_rule",
+    "registered_rule",
+    "rule_entry_points",
     "select",
 }
 

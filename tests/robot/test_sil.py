@@ -13,12 +13,14 @@ longer mode (whole runs, more of them)::
 from __future__ import annotations
 
 import os
+import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from swarmtag.errors import ConfigError
-from swarmtag.policy import Edf, Proximity, Urgency, Weighted
+from swarmtag.errors import BackendFallback, ConfigError
+from swarmtag.policy import Edf, Proximity, Urgency, Weighted, load_rule
 from swarmtag.sim import Scenario, simulate
 from tests.robot.helpers import REALISM, differing_runs, scenario
 
@@ -130,6 +132,33 @@ def test_large_swarm_event_logs_are_identical(realism):
 )
 def test_perception_and_walk_variants_are_identical(world):
     assert _compare(world, 2, POLICIES[:2]) == {}
+
+
+RULES = Path(__file__).parents[1] / "policy" / "rule_examples.py"
+
+
+_PAPER = scenario(3, 7, "paper-sim", ticks=700)
+_SEARCH = scenario(
+    3,
+    7,
+    "lab",
+    ticks=700,
+    urgency={"model": "static"},
+    camera={"range": 1.0, "look_around": 0.0},
+    radio={"search": True},
+)
+
+
+@pytest.mark.parametrize(
+    ("world", "name"),
+    [(_PAPER, "oldest_first"), (_PAPER, "everything"), (_SEARCH, "oldest_first")],
+    ids=["paper-sim-age", "paper-sim-context", "ble-search-age"],
+)
+def test_a_rule_of_ones_own_runs_identically_in_the_tree(world, name):
+    rule = load_rule(f"{RULES}:{name}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BackendFallback)  # the builtin side falls back
+        assert differing_runs(world, rule, seed=3, runs=2) == []
 
 
 def test_the_runs_exercise_the_whole_tree():

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import sys
+import warnings
 from collections.abc import Sequence
+from typing import TextIO
 
 import click
 
@@ -15,13 +17,13 @@ from swarmtag.cli.calibrate import calibrate_cmd
 from swarmtag.cli.demo import demo
 from swarmtag.cli.log import log_group
 from swarmtag.cli.metrics import metrics
-from swarmtag.cli.policies import policies_cmd
+from swarmtag.cli.policies import policies_cmd, policy_group
 from swarmtag.cli.profiles import profiles_cmd
 from swarmtag.cli.robot import robot
 from swarmtag.cli.simulate import simulate_cmd
 from swarmtag.cli.study import reproduce, study
 from swarmtag.cli.tag import tag
-from swarmtag.errors import SwarmtagError
+from swarmtag.errors import BackendFallback, SwarmtagError
 
 __all__ = ["EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "app", "run"]
 
@@ -62,6 +64,7 @@ app.add_command(simulate_cmd)
 app.add_command(study)
 app.add_command(reproduce)
 app.add_command(policies_cmd)
+app.add_command(policy_group)
 app.add_command(profiles_cmd)
 app.add_command(calibrate_cmd)
 app.add_command(robot)
@@ -77,6 +80,24 @@ def _fail(message: str, status: int) -> None:
     sys.exit(status)
 
 
+def _note(  # noqa: PLR0917 - warnings.showwarning's signature
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
+    """Print our own notes (``BackendFallback``) as one line; others as Python does."""
+    if issubclass(category, BackendFallback):
+        click.echo(f"swarmtag: note: {_one_line(str(message))}", err=True)
+        return
+    _SHOW(message, category, filename, lineno, file, line)
+
+
+_SHOW = warnings.showwarning
+
+
 def run(argv: Sequence[str] | None = None) -> None:
     """Run the command line: exit 0, 2 with one line on stderr on bad input, 130 on Ctrl-C.
 
@@ -89,7 +110,10 @@ def run(argv: Sequence[str] | None = None) -> None:
             _fail(f"argument {position} ({show(word)}) contains a NUL byte", EXIT_BAD_INPUT)
     try:
         try:
-            result = app.main(args=argv, prog_name="swarmtag", standalone_mode=False)
+            with warnings.catch_warnings():
+                warnings.simplefilter("default", BackendFallback)  # once per rule, as a note
+                warnings.showwarning = _note
+                result = app.main(args=argv, prog_name="swarmtag", standalone_mode=False)
         finally:
             checkpoint()  # an interrupt swallowed on the way out still ends as one
     except (_Interrupted, KeyboardInterrupt, click.Abort) as interrupt:

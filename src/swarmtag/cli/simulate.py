@@ -27,7 +27,14 @@ from swarmtag.cli.metrics import render_choices, render_report, summarize_with_c
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 from swarmtag.io.ros_types import require_rosbags
-from swarmtag.policy import Policy, Proximity, Urgency, Weighted, parse_policy
+from swarmtag.policy import (
+    Policy,
+    Proximity,
+    Urgency,
+    Weighted,
+    load_checked_rule,
+    parse_policy,
+)
 from swarmtag.sim import Scenario, simulate
 from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER, batch_memory
 from swarmtag.sim.simulation import backend_for
@@ -41,9 +48,13 @@ CHUNK_RUNS: Final = 50
 
 
 def _policies(
-    conditions: Sequence[str], policy: str | None, alpha: float | None, w: float | None
+    conditions: Sequence[str],
+    policy: str | None,
+    alpha: float | None,
+    w: float | None,
+    rule_files: Sequence[str] = (),
 ) -> list[Policy]:
-    """The policies to run, from ``--condition`` names or ``--policy/--alpha/--w``."""
+    """The policies to run: ``--condition`` names or ``--policy/--alpha/--w``, then rule files."""
     if conditions and (policy or alpha is not None or w is not None):
         msg = "use either --condition (repeatable) or --policy with --alpha/--w, not both"
         raise click.UsageError(msg)
@@ -65,6 +76,7 @@ def _policies(
         raise click.UsageError("--alpha and --w need --policy urgency or --policy weighted")
     else:
         chosen = [parse_policy(name) for name in DEFAULT_CONDITIONS]
+    chosen += [load_checked_rule(spec) for spec in rule_files]
     names = [p.name for p in chosen]
     repeated = sorted({name for name in names if names.count(name) > 1})
     if repeated:
@@ -226,6 +238,14 @@ def _draw(
     "[default: proximity and urgency:alpha=0.7]",
 )
 @click.option(
+    "--policy-file",
+    "rule_files",
+    multiple=True,
+    metavar="FILE.py:FUNCTION",
+    help="A score rule of your own, repeatable: adds a condition named after the function "
+    "(docs/policy.md; runs on the reference backend).",
+)
+@click.option(
     "--policy",
     type=click.Choice(["proximity", "urgency", "weighted"]),
     help="One condition by policy name (with --alpha or --w).",
@@ -303,6 +323,7 @@ def _draw(
 def simulate_cmd(
     *,
     conditions: tuple[str, ...],
+    rule_files: tuple[str, ...],
     policy: str | None,
     alpha: float | None,
     w: float | None,
@@ -333,7 +354,7 @@ def simulate_cmd(
     scene) and gives the same rows whether run alone (--run-offset i --runs 1)
     or inside a batch.
     """
-    policies = _policies(conditions, policy, alpha, w)
+    policies = _policies(conditions, policy, alpha, w, rule_files)
     scenario = build_scenario(profile=profile, config=config, flags=flags, settings=settings)
     plan = OutputPlan()
     for option, source in (("--config", config), ("--profile", Path(profile))):
@@ -356,6 +377,8 @@ def simulate_cmd(
         require_rosbags()  # the missing extra is named before any work
     recorded = any(path is not None for path in drawn)
     resolved = backend_for(controller, backend).name
+    if resolved == "fast" and all(not p.compiled for p in policies):
+        resolved = "reference"  # every condition falls back (simulate says so)
     _check_work(scenario, len(policies), runs, run_offset, record=recorded, backend=resolved)
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()

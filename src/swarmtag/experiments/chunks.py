@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from swarmtag.experiments.store import RunKey
 from swarmtag.io import CarrierLog, EventTable
-from swarmtag.policy import parse_policy
+from swarmtag.policy import load_rule, parse_policy
 from swarmtag.sim import Scenario, simulate
 
 __all__ = ["ChunkJob", "ChunkResult", "simulate_chunk", "split_runs"]
@@ -38,10 +38,14 @@ class ChunkJob:
     """Simulation backend (``None``: the default, ``fast`` where numba is installed)."""
     threads: int | None = None
     """Threads of the compiled backend (``None``: every core)."""
+    rules: tuple[str, ...] = ()
+    """Score rule files (``FILE.py:FUNCTION``) a worker loads before reading the condition."""
 
 
 def simulate_chunk(job: ChunkJob) -> ChunkResult:
     """Simulate one chunk; a pure function of the job (run in worker processes)."""
+    for spec in job.rules:  # a spawned worker has not loaded the study's rule files
+        load_rule(spec)
     result = simulate(
         job.scenario,
         parse_policy(job.condition),

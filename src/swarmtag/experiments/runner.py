@@ -85,7 +85,8 @@ def study_key(study: Study, scale: str) -> RunKey:
         study=study.name,
         scale=scale,
         seed=study.seed,
-        code_version=study.scale(scale).code_version,
+        code_version=study.scale(scale).code_version
+        + (f".rules-{study.rules_digest}" if study.policy_files else ""),
     )
 
 
@@ -116,6 +117,7 @@ def plan_chunks(
                     runs=count,
                     backend=backend,
                     threads=threads,
+                    rules=study.policy_files,
                 )
                 for offset, count in split_runs(missing, study.chunk_runs)
             )

@@ -23,6 +23,8 @@ The file layout (every key but ``name``, ``conditions`` and ``runs`` optional)::
                                 # where numba is installed; the results are the same bytes)
     resamples = 10000           # bootstrap resamples of the metrics
     chunk_runs = 10             # runs per unit of work (results do not depend on it)
+    policy_files = ["rules.py:my_rule"]   # score rules of one's own, FILE relative to
+                                # this file; each adds a condition named after its function
 
     [scenario]                  # swarmtag.sim.Scenario.from_mapping layout
     robots = 3
@@ -52,7 +54,7 @@ from swarmtag._checks import MAX_RESAMPLES, MAX_RUN_INDEX, MAX_SEED, check_int
 from swarmtag._sources import PACKAGE_ROOT, imported_sources
 from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError, PolicyError, StudyError
-from swarmtag.policy import Policy, parse_policy
+from swarmtag.policy import Policy, load_checked_rule, parse_policy
 from swarmtag.sim import Scenario
 from swarmtag.sim.backends import BACKENDS
 from swarmtag.sim.config.parts import MAX_TICKS
@@ -79,6 +81,7 @@ _KEYS: Final = (
     "backend",
     "resamples",
     "chunk_runs",
+    "policy_files",
     "scenario",
     "scales",
 )
@@ -211,9 +214,16 @@ class Study:
     backend: str | None = None
     """Simulation backend: ``reference``, ``fast``, or ``None`` for the default (results agree)."""
     source: str | None = field(default=None, compare=False)
+    policy_files: tuple[str, ...] = ()
+    """Score rules of one's own, ``FILE.py:FUNCTION`` with ``FILE`` absolute (loaded, checked)."""
+    rules_digest: str = field(default="", init=False, compare=False)
+    """12 hex digits over the rule files' bytes and functions when loaded ('' without any):
+    part of the store key (``study_key``), so an edited rule never reuses its old runs."""
 
     def __post_init__(self) -> None:
         _folder_name(self.name, "name")
+        object.__setattr__(self, "policy_files", _rules(self.policy_files, None))
+        object.__setattr__(self, "rules_digest", _rules_digest(self.policy_files))
         object.__setattr__(self, "conditions", _conditions(list(self.conditions)))
         object.__setattr__(self, "scales", tuple(self.scales))
         if not self.scales:
@@ -247,16 +257,22 @@ class Study:
             raise StudyError(msg)
 
     @classmethod
-    def from_mapping(cls, data: Mapping[str, Any], *, source: str | None = None) -> Study:
-        """A study from a TOML-layout mapping; ``source`` (a file name) prefixes every message."""
+    def from_mapping(
+        cls, data: Mapping[str, Any], *, source: str | None = None, base: Path | None = None
+    ) -> Study:
+        """A study from a TOML-layout mapping; ``source`` (a file name) prefixes every message.
+
+        ``policy_files`` are read relative to ``base`` (the study file's
+        folder; default: the working directory).
+        """
         try:
-            return cls._parse(data, source)
+            return cls._parse(data, source, base)
         except (StudyError, ConfigError) as error:
             prefix = f"{source}: " if source else ""
             raise StudyError(f"{prefix}{error}") from None
 
     @classmethod
-    def _parse(cls, data: Mapping[str, Any], source: str | None) -> Study:
+    def _parse(cls, data: Mapping[str, Any], source: str | None, base: Path | None) -> Study:
         data = _table(data, "study")
         for key in data:
             if key not in _KEYS:
@@ -266,7 +282,15 @@ class Study:
             if key not in data:
                 msg = f"{key}: missing; a study needs {', '.join(_REQUIRED)}"
                 raise StudyError(msg)
+        files = data.get("policy_files", [])
+        if not isinstance(files, list):
+            msg = f"policy_files: {files!r} is not a list of 'FILE.py:FUNCTION' strings"
+            raise StudyError(msg)
+        rules = _rules(tuple(files), base)
         conditions = _conditions(data["conditions"])
+        conditions += tuple(
+            name for name in (spec.rpartition(":")[2] for spec in rules) if name not in conditions
+        )
         runs = _int(data["runs"], "runs", low=1, high=MAX_RUN_INDEX)
         urgency = data.get("urgency", "growing")
         if urgency not in URGENCY_MODELS:
@@ -299,6 +323,7 @@ class Study:
             backend=data.get("backend"),
             scales=_scales(data, urgency, ticks, profile),
             source=source,
+            policy_files=rules,
         )
 
     def policies(self) -> tuple[Policy, ...]:
@@ -321,6 +346,34 @@ class Study:
     def run_count(self, *, quick: bool = False) -> int:
         """Runs per condition and scale: ``quick_runs`` under ``quick``, else ``runs``."""
         return self.quick_runs if quick else self.runs
+
+
+def _rules_digest(specs: tuple[str, ...]) -> str:
+    if not specs:
+        return ""
+    digest = hashlib.sha256()
+    for spec in specs:
+        path, _, function = spec.rpartition(":")
+        digest.update(Path(path).read_bytes() + b"\0" + function.encode() + b"\0")
+    return digest.hexdigest()[:12]
+
+
+def _rules(specs: tuple[object, ...], base: Path | None) -> tuple[str, ...]:
+    """Each ``FILE.py:FUNCTION`` loaded and checked, as ``ABSOLUTE-FILE:FUNCTION``."""
+    resolved = []
+    for index, spec in enumerate(specs):
+        key = f"policy_files[{index}]"
+        if not isinstance(spec, str):
+            msg = f"{key}: {spec!r} is not a 'FILE.py:FUNCTION' string"
+            raise StudyError(msg)
+        try:
+            load_checked_rule(spec, base=base)
+        except PolicyError as error:
+            raise StudyError(f"{key}: {error}") from None
+        path, _, function = spec.rpartition(":")
+        absolute = Path(path) if base is None else base / path
+        resolved.append(f"{absolute.resolve()}:{function}")
+    return tuple(resolved)
 
 
 def _conditions(value: object) -> tuple[str, ...]:
@@ -403,4 +456,4 @@ def _scales(
 def read_study_file(path: str | os.PathLike[str]) -> Study:
     """Read and validate a study TOML file; every refusal is a ``StudyError`` naming the file."""
     data = read_toml(path, what="study file", error=StudyError)
-    return Study.from_mapping(data, source=Path(path).name)
+    return Study.from_mapping(data, source=Path(path).name, base=Path(path).parent)

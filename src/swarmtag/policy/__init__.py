@@ -7,6 +7,11 @@ A robot scores every available carrier it detects and fetches the best one:
 - ``Weighted(w)`` scores ``w * u_c + (1 - w) * u_d``;
 - ``Edf()`` scores ``u_c`` (earliest deadline first: urgency alone).
 
+A rule of one's own is a Python function ``score(urgency, distance,
+**context)`` (``ScoreRule``; ``load_rule("rules.py:FUNCTION")``, or a
+package's entry point in the group ``swarmtag.policies``); ``check_rule``
+says whether the simulator can trust it.
+
 Exact ties go to the smaller distance, then the smaller marker id. The
 simulator calls ``select`` on ``(runs, robots, carriers)`` arrays; the
 behaviour tree calls ``choose`` on one robot's ``Candidate`` list. Policies
@@ -21,6 +26,7 @@ Urgency(alpha=0.7)
 from __future__ import annotations
 
 from swarmtag.policy._catalogue import CATALOGUE, RuleInfo
+from swarmtag.policy._check import RuleCheck, check_rule, load_checked_rule
 from swarmtag.policy._choose import Candidate, choose
 from swarmtag.policy._kernel import (
     EDF_KIND,
@@ -31,14 +37,25 @@ from swarmtag.policy._kernel import (
 )
 from swarmtag.policy._names import parse_policy
 from swarmtag.policy._policies import Edf, Policy, Proximity, Urgency, Weighted
+from swarmtag.policy._rules import (
+    CONTEXT,
+    RULE_GROUP,
+    ScoreRule,
+    load_rule,
+    register_rule,
+    registered_rule,
+    rule_entry_points,
+)
 from swarmtag.policy._select import select
 from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE, proximity_term
 
 __all__ = [
     "CATALOGUE",
+    "CONTEXT",
     "EDF_KIND",
     "PROXIMITY_KIND",
     "PROXIMITY_RANGE",
+    "RULE_GROUP",
     "URGENCY_KIND",
     "URGENCY_SCALE",
     "WEIGHTED_KIND",
@@ -46,12 +63,20 @@ __all__ = [
     "Edf",
     "Policy",
     "Proximity",
+    "RuleCheck",
     "RuleInfo",
+    "ScoreRule",
     "Urgency",
     "Weighted",
+    "check_rule",
     "choose",
     "kernel_score",
+    "load_checked_rule",
+    "load_rule",
     "parse_policy",
     "proximity_term",
+    "register_rule",
+    "registered_rule",
+    "rule_entry_points",
     "select",
 ]

@@ -13,12 +13,13 @@ from typing import Final
 from swarmtag.errors import PolicyError
 from swarmtag.policy._catalogue import CATALOGUE, accepted_forms
 from swarmtag.policy._policies import Edf, Policy, Proximity, Urgency, Weighted
+from swarmtag.policy._rules import registered_rule
 
 __all__ = ["parse_policy"]
 
 _ACCEPTED: Final = accepted_forms()
 _NAME: Final = re.compile(
-    r"""\s*(?P<kind>[A-Za-z]+)\s*
+    r"""\s*(?P<kind>[A-Za-z][A-Za-z0-9_]*)\s*
         (?: :\s*(?P<param>[A-Za-z]+)\s*=\s*(?P<value>\S+?)\s* )?""",
     re.VERBOSE,
 )
@@ -33,7 +34,9 @@ def parse_policy(name: str) -> Policy:
     """Parse a condition name such as ``urgency:alpha=0.7`` into its policy.
 
     Accepts the canonical names and forgiving spellings of them: surrounding
-    whitespace, any letter case in the words, integers for floats. Raises
+    whitespace, any letter case in the words, integers for floats; and the
+    names of score rules of one's own loaded in this process (``load_rule``)
+    or offered by an installed package (``swarmtag.policies``). Raises
     ``PolicyError`` naming the text otherwise. ``parse_policy(p.name) == p``.
 
     >>> parse_policy("urgency:alpha=3")
@@ -59,6 +62,9 @@ def parse_policy(name: str) -> Policy:
         raise PolicyError(msg)
     expected = _PARAMETER.get(kind)
     if expected is None:
+        rule = registered_rule(match["kind"]) if param is None else None
+        if rule is not None:
+            return rule
         msg = f"condition name: unknown policy {match['kind']!r} in {name!r}; {_ACCEPTED}"
         raise PolicyError(msg)
     if param is None or param.lower() != expected:

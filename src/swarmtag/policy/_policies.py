@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
 from numbers import Real
 from typing import Any, overload
@@ -90,6 +91,30 @@ class Policy(ABC):
             )
             raise PolicyError(msg) from exc
         return wrap_result(self._formula(u, d), urgency, distance)
+
+    @property
+    def compiled(self) -> bool:
+        """Whether the compiled kernel runs it (``kernel_form`` exists): every built-in rule."""
+        return True
+
+    @property
+    def context_names(self) -> tuple[str, ...]:
+        """The context its scores need beside urgency and distance (``scores``): none here."""
+        return ()
+
+    def scores(
+        self,
+        urgency: npt.NDArray[np.float64],
+        distance: npt.NDArray[np.float64],
+        context: Mapping[str, npt.ArrayLike],
+    ) -> npt.NDArray[np.float64]:
+        """Scores of float64 arrays of one shape, with the candidates' ``context`` (``select``).
+
+        The built-in formulas use no context; a rule of one's own may
+        (``swarmtag.policy.ScoreRule``).
+        """
+        del context
+        return self._formula(urgency, distance)
 
     def __str__(self) -> str:
         return self.name

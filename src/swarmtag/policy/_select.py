@@ -9,6 +9,8 @@ passes over the arrays and no Python loop.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 import numpy.typing as npt
 
@@ -72,6 +74,7 @@ def select(
     distance: npt.ArrayLike,
     marker: npt.ArrayLike,
     available: npt.ArrayLike | None = None,
+    context: Mapping[str, npt.ArrayLike] | None = None,
 ) -> npt.NDArray[np.intp]:
     """Index of the chosen carrier along the last axis, -1 where none is available.
 
@@ -83,7 +86,10 @@ def select(
     single robot's ``(carriers,)``. Only available carriers are chosen;
     among them the largest ``policy.score`` wins, exact ties going to the
     smaller distance, then to the smaller marker id. Every entry is
-    validated, available or not. Raises ``PolicyError`` on bad inputs.
+    validated, available or not. ``context`` holds what a rule of one's own
+    may ask for beside ``marker`` (``age``: seconds each carrier has waited;
+    ``swarmtag.policy.CONTEXT``), each broadcasting to the same shape.
+    Raises ``PolicyError`` on bad inputs.
 
     >>> from swarmtag.policy import Proximity, Urgency
     >>> scene = {"urgency": [1, 9], "distance": [0.9, 2.7], "marker": [10, 11]}
@@ -113,7 +119,7 @@ def select(
         return np.full(shape[:-1], -1, dtype=np.intp)
 
     u, d, m = (np.broadcast_to(x, shape) for x in (u, d, m))
-    scores = policy.score(u, d)
+    scores = policy.scores(u, d, {"marker": m, **(context or {})})
     if a is not None:
         a = np.broadcast_to(a, shape)
         if not (scores.flags.owndata and scores.flags.writeable):

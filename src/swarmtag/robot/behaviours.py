@@ -247,6 +247,7 @@ class SelectCarrier(RobotBehaviour):
                 distance=candidate_distances(tags, seen) if searching else seen.distance,
                 marker=config.markers,
                 available=available,
+                context={} if tags.waited is None else {"age": tags.waited},
             )
         )
         if choice < 0:

@@ -84,13 +84,17 @@ class TagStates:
     ``status`` is -1 for a tag never heard; ``age`` is ticks since it was
     last heard (-1 never). ``distance``: the robot's running estimate of
     each tag's distance from its RSSI (NaN never heard), where the robot
-    ranges tags (BLE-led search); None where it does not.
+    ranges tags (BLE-led search); None where it does not. ``waited``:
+    seconds since each carrier's order time, as the warehouse management
+    system knows it (what a score rule of one's own may ask for as ``age``);
+    None where the robot is not told.
     """
 
     status: NDArray[np.int8]
     urgency: NDArray[np.int8]
     age: NDArray[np.int64]
     distance: Float | None = None
+    waited: Float | None = None
 
 
 @dataclass(frozen=True, eq=False)

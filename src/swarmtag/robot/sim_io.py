@@ -32,6 +32,7 @@ from swarmtag.sim.model.params import Params
 from swarmtag.sim.model.randomness import TickInputs
 from swarmtag.sim.model.state import Int, Mode, WorldState
 from swarmtag.sim.world.sensing import Senses
+from swarmtag.sim.world.urgency import waited
 
 __all__ = ["SimRobotIO", "StepContext"]
 
@@ -138,6 +139,7 @@ class SimRobotIO:
             urgency=s.known_urgency[r, n],
             age=np.where(heard >= 0, self.context.t - heard, -1),
             distance=np.where(heard >= 0, s.rssi[r, n], np.nan) if ranged else None,
+            waited=waited(s.order_time[r], self.context.t, self.context.params.scenario.tick),
         )
 
     def detections(self) -> Detections:

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import warnings
+
 from swarmtag._checks import MAX_RUN_INDEX, check_int
 from swarmtag._resources import check_memory
-from swarmtag.errors import ConfigError
+from swarmtag.errors import BackendFallback, ConfigError
 from swarmtag.policy import Policy
-from swarmtag.sim.backends import MAX_THREADS, Backend, Batch, resolve_backend
+from swarmtag.sim.backends import FAST, MAX_THREADS, REFERENCE, Backend, Batch, resolve_backend
 from swarmtag.sim.builtin.controller import BUILTIN
 from swarmtag.sim.config.scenario import Scenario
 from swarmtag.sim.control.interface import Controller
@@ -48,6 +50,22 @@ def backend_for(controller: Controller | str, backend: Backend | str | None) -> 
         _close(running, owned)
 
 
+def _runs_rule(chosen: Backend, policy: Policy) -> Backend:
+    """``chosen``, or the reference backend where ``chosen`` is compiled and the rule is Python.
+
+    Says so with a ``BackendFallback`` warning (the command line's stderr note).
+    """
+    checked: object = policy
+    if chosen is not FAST or not isinstance(checked, Policy) or checked.compiled:
+        return chosen
+    msg = (
+        f"rule {policy.name!r} is Python code, which the compiled backend cannot call; "
+        "its runs go to the reference backend (the same results, slower: docs/performance.md)"
+    )
+    warnings.warn(msg, BackendFallback, stacklevel=3)
+    return REFERENCE
+
+
 def simulate(
     scenario: Scenario,
     policy: Policy,
@@ -75,6 +93,9 @@ def simulate(
     ``backend``: a ``swarmtag.sim.Backend`` or its name, ``"reference"``
     (numpy) or ``"fast"`` (compiled with numba; the same bytes); ``None``
     picks ``fast`` where numba is installed and the controller is built in.
+    A rule of one's own (``swarmtag.policy.ScoreRule``, Python code) runs on
+    the reference backend where ``fast`` was asked for or is the default,
+    with a ``BackendFallback`` warning.
     ``threads``: threads the fast backend runs runs on (default: every core,
     or ``SWARMTAG_THREADS``).
 
@@ -92,7 +113,7 @@ def simulate(
         threads = check_int("threads", threads, low=1, high=MAX_THREADS)
     running, owned = _controller(controller)
     try:
-        chosen = resolve_backend(backend, controller=running)
+        chosen = _runs_rule(resolve_backend(backend, controller=running), policy)
         check_memory(
             f"{runs} runs of {scenario.robots} robots and {scenario.carriers} carriers",
             chosen.memory(scenario, runs, record=record),

@@ -54,6 +54,7 @@ from swarmtag.sim.model.randomness import TickInputs
 from swarmtag.sim.model.state import Int, Mode, WorldState
 from swarmtag.sim.world.predock import nearest_free_face, taken_faces
 from swarmtag.sim.world.sensing import Senses
+from swarmtag.sim.world.urgency import waited
 from swarmtag.tag import TagStatus
 
 __all__ = ["decide"]
@@ -162,6 +163,7 @@ def _selection(
         distance=distance,
         marker=params.markers,
         available=available,
+        context=_context(s, params, t),
     ).astype(np.int64)
     chosen = choice >= 0
     rows, robots = grid(*choice.shape)
@@ -175,6 +177,13 @@ def _selection(
         s.seek_ref[seek] = own(s.rssi, choice)[seek]
         chosen &= ~seek
     _approach(s, choice, chosen, params)
+
+
+def _context(s: WorldState, params: Params, t: int) -> dict[str, Float]:
+    """What the policy asks for beside urgency, distance and marker (a rule of one's own)."""
+    if "age" not in params.policy.context_names:
+        return {}
+    return {"age": waited(s.order_time, t, params.scenario.tick)[:, None, :]}
 
 
 def _look_round(

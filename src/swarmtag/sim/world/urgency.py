@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from swarmtag.sim.model.geometry import Float
 
-__all__ = ["InitialUrgency", "growing_urgency", "initial_urgency", "static_urgency"]
+__all__ = ["InitialUrgency", "growing_urgency", "initial_urgency", "static_urgency", "waited"]
 
 _TOP = 9
 
@@ -42,6 +42,19 @@ def static_urgency(tau: Float, horizon_s: float) -> NDArray[np.int8]:
     array([9, 9, 9, 5, 0, 0], dtype=int8)
     """
     return np.minimum(_TOP, np.floor(10.0 * (1.0 - tau / horizon_s))).astype(np.int8)
+
+
+def waited(order_time: Float, t: int, tick: float) -> Float:
+    """Seconds each carrier has waited at tick ``t``: ``max(t - order_time, 0) * tick``.
+
+    What a rule of one's own gets as ``age`` (``swarmtag.policy.CONTEXT``).
+
+    >>> waited(np.array([-10.0, 0.0, 50.0]), 20, 0.1)
+    array([3., 2., 0.])
+    """
+    ticks = np.maximum(t - order_time, 0.0)
+    seconds: Float = ticks * tick
+    return seconds
 
 
 @dataclass(frozen=True, eq=False)
