@@ -20,7 +20,8 @@ what to do instead.
     │   ├── ReplayedWrite                   counter not above the writer's highest seen
     │   ├── RoleNotAllowed                  that role may not change that field
     │   ├── IllegalTransition               that role may not make that status change
-    │   └── WriterTableFull                 the tag already tracks as many writers as it can
+    │   ├── WriterTableFull                 the tag already tracks as many writers as it can
+    │   └── ClaimRefused                    a claim on a tag awaiting no robot, or held by another
     ├── StateRecordError (ValueError)       a persisted tag record is corrupt or unknown
     ├── KeyFileError (ValueError)           a key file is missing, not private or malformed
     ├── CounterFileError (ValueError)       a writer's counter file is corrupt or unwritable
@@ -52,6 +53,7 @@ __all__ = [
     "BackendFallback",
     "BagError",
     "CalibrationError",
+    "ClaimRefused",
     "ConfigError",
     "ConformanceError",
     "CounterFileError",
@@ -168,6 +170,12 @@ class WriterTableFull(WriteRejected):
     """The tag already tracks its maximum number of writer ids and refuses a new one."""
 
     att_error = 0x85
+
+
+class ClaimRefused(WriteRejected):
+    """A claim the tag cannot grant: it awaits no robot, or another robot holds it."""
+
+    att_error = 0x86
 
 
 class StateRecordError(SwarmtagError, ValueError):

@@ -21,19 +21,24 @@ def test_every_rule_is_listed_with_its_form_reference_and_backends():
     for info in CATALOGUE:
         line = next(row for row in result.output.splitlines() if f"│ {info.form} " in row)
         assert info.kind in line
-        assert "reference, fast, bt" in line
+        assert ", ".join(info.backends)[:12] in line
         assert info.reference[:12] in result.output  # the column may fold the rest
     assert [info.form for info in CATALOGUE] == [
         "proximity",
         "urgency:alpha=A",
         "edf",
         "weighted:w=W",
+        "threshold:theta=T",
+        "oracle:alpha=A",
+        "cbaa:comm_range=C,loss=L",
+        "adaptive:gain=G",
     ]
 
 
 def test_the_catalogue_is_what_condition_names_accept():
     for info in CATALOGUE:
-        name = info.name if info.parameter is None else f"{info.name}:{info.parameter}=0.5"
+        values = ",".join(f"{name}=0.5" for name in info.parameter_names)
+        name = f"{info.name}:{values}" if values else info.name
         assert parse_policy(name).name.split(":")[0] == info.name
 
 
@@ -109,7 +114,7 @@ def test_policy_file_adds_a_condition_named_after_the_function(capsys):
     names = [c["condition"] for c in json.loads(out)["conditions"]]
     assert names == ["proximity", "oldest_first", "urgency_first"]
     if fast_available():
-        assert err.count("swarmtag: note: rule ") == 2
+        assert err.count("swarmtag: note: condition ") == 2
         assert "'urgency_first' is Python code" in err
 
 
@@ -123,6 +128,6 @@ def test_policies_lists_the_rules_packages_register(monkeypatch):
     result = CliRunner().invoke(app, ["policies"], env={"COLUMNS": "250"})
     assert result.exit_code == 0, result.output
     line = next(row for row in result.output.splitlines() if "│ fifo_by_age " in row)
-    assert "FIFO: the carrier that has waited longest." in line
+    assert "FIFO: the carrier" in line
     assert "falls back" in line
-    assert "--policy-file FILE.py:FUNCTION" in result.output
+    assert "--policy-file" in result.output

@@ -13,6 +13,7 @@ from swarmtag.policy import _rules
 
 from .helpers import SMALL_TOML, write_study
 
+
 @pytest.fixture(autouse=True)
 def _fresh_rules(monkeypatch):
     """Each test's rule files are new: their names are not taken by another test's."""
@@ -22,10 +23,12 @@ def _fresh_rules(monkeypatch):
 RULE = "def most_urgent(urgency, distance):\n    return urgency\n"
 
 
-def rule_study(folder: Path, rule: str = RULE, files: str = '["rules/mine.py:most_urgent"]') -> Path:
+def rule_study(
+    folder: Path, rule: str = RULE, files: str = '["rules/mine.py:most_urgent"]'
+) -> Path:
     (folder / "rules").mkdir(exist_ok=True)
     (folder / "rules" / "mine.py").write_text(rule)
-    text = SMALL_TOML.replace("profile = \"base\"\n", f'profile = "base"\npolicy_files = {files}\n')
+    text = SMALL_TOML.replace('profile = "base"\n', f'profile = "base"\npolicy_files = {files}\n')
     return write_study(folder, text)
 
 
@@ -50,7 +53,7 @@ def test_a_rule_file_adds_its_condition_relative_to_the_study_file(tmp_path, mon
 )  # fmt: skip
 def test_bad_rule_files_name_the_study_file_and_key(tmp_path, rule, files, words):
     path = rule_study(tmp_path, rule, files)
-    with pytest.raises(StudyError, match="^study.toml: ") as caught:
+    with pytest.raises(StudyError, match=r"^study\.toml: ") as caught:
         load_study(path)
     assert words in str(caught.value)
     assert "\n" not in str(caught.value)
@@ -81,7 +84,5 @@ def test_spawned_workers_load_the_rule_and_agree_with_one_process(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", BackendFallback)
         alone = run_study(study, out_dir=tmp_path / "one", quick=True, workers=1)
-    spawned = run_study(
-        study, out_dir=tmp_path / "two", quick=True, workers=2, backend="reference"
-    )
+    spawned = run_study(study, out_dir=tmp_path / "two", quick=True, workers=2, backend="reference")
     assert spawned.metrics == alone.metrics

@@ -12,7 +12,15 @@ import swarmtag.policy
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "policy.md"
 PUBLIC = {
+    "ADAPTIVE_START",
     "CATALOGUE",
+    "CBAA_ALPHA",
+    "Adaptive",
+    "Allocator",
+    "Cbaa",
+    "Oracle",
+    "Threshold",
+    "best_of",
     "CONTEXT",
     "EDF_KIND",
     "PROXIMITY_KIND",

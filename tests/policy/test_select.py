@@ -261,3 +261,19 @@ def test_non_numeric_inputs_are_refused(name, scene):
 def test_policy_must_be_a_policy():
     with pytest.raises(PolicyError, match="policy: 'proximity' is not a Policy"):
         select("proximity", urgency=[1], distance=[1.0], marker=[1])
+
+
+def test_best_of_takes_the_largest_score_by_the_tie_rule_and_changes_no_input():
+    from swarmtag.policy import best_of
+
+    scores = np.array([[3.0, 5.0, 5.0, 9.0]])
+    distance = np.array([[1.0, 2.0, 1.5, 0.5]])
+    available = np.array([[True, True, True, False]])
+    kept = scores.copy()
+    chosen = best_of(scores, distance=distance, marker=np.arange(4), available=available)
+    assert chosen.tolist() == [2]  # 9 is not available; of the two 5s, the nearer
+    assert np.array_equal(scores, kept)
+    assert (
+        best_of(scores, distance=distance, marker=np.arange(4), available=~available | False)[0]
+        == 3
+    )

@@ -26,6 +26,7 @@ from bleak.exc import (
 )
 
 from swarmtag.errors import (
+    ClaimRefused,
     ConfigError,
     CounterFileError,
     ForgedWrite,
@@ -254,6 +255,7 @@ def test_the_refusal_table_is_the_inverse_of_att_errors():
         RoleNotAllowed,
         IllegalTransition,
         WriterTableFull,
+        ClaimRefused,
     }
 
 

@@ -46,6 +46,7 @@ from swarmtag.tag import (
     write_key_file,
     write_role_key_file,
 )
+from swarmtag.tag.claim import Claim
 from tests.strategies import changes, tag_states
 
 KEY = bytes(range(16))  # the site key
@@ -107,6 +108,18 @@ hostile = st.one_of(
     st.builds(MemoryStore),
     records.map(_stored),
 )
+
+
+def _claim(message: object, now: object) -> Claim:
+    """Claim a fresh tag; a refusal must leave its counters, store and claim as they were."""
+    store = MemoryStore()
+    tag = TagModel.provision(START, site_key=KEY, store=store)
+    before = store.load()
+    try:
+        return tag.claim(message, now=now)  # type: ignore[arg-type]
+    except SwarmtagError:
+        assert (dict(tag.counters), store.load(), tag.claim_at(0.0)) == ({}, before, None)
+        raise
 
 
 def _apply(message: object) -> TagState:
@@ -171,6 +184,12 @@ TARGETS: dict[str, tuple[Callable[..., object], int, type | tuple[type, ...]]] =
     "ScanFilter.feed": (lambda data: ScanFilter().feed(data), 1, (TagState, type(None))),
     "TagModel": (lambda r, k, s: TagModel(r, site_key=k, store=s), 3, TagModel),
     "TagModel.apply": (_apply, 1, TagState),
+    "TagModel.claim": (_claim, 2, Claim),
+    "TagModel.claim_at": (
+        lambda now: TagModel.provision(START, site_key=KEY, store=MemoryStore()).claim_at(now),
+        1,
+        type(None),
+    ),
     "TagModel.boot": (lambda k, s: TagModel.boot(site_key=k, store=s), 2, TagModel),
     "TagModel.provision": (
         lambda st_, k, s: TagModel.provision(st_, site_key=k, store=s),

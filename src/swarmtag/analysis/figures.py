@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from swarmtag._atomic import atomic_path
 from swarmtag._plotting import pyplot
 from swarmtag.analysis.latency import UrgencyLatency, latency_by_urgency
+from swarmtag.analysis.ranking import RankRow
 from swarmtag.analysis.runs import ConditionRuns
 from swarmtag.analysis.summary import MetricsReport
 from swarmtag.analysis.tables import metric_label, unit_word
@@ -29,6 +30,7 @@ from swarmtag.policy import Urgency, Weighted, parse_policy
 __all__ = [
     "latency_curve_figure",
     "pa_curve_figure",
+    "pareto_figure",
     "sweep_figure",
     "urgency_latency_figure",
     "write_figures",
@@ -131,6 +133,52 @@ def sweep_figure(
             ax.set_ylabel(metric_label(metric, report.time_unit))
             ax.grid(alpha=0.3)
         fig.suptitle("Parameter sweep, values with 95 % bootstrap CIs", fontsize=10)
+        _save(fig, path)
+    finally:
+        plt.close(fig)
+
+
+def pareto_figure(
+    ranked: Mapping[str, Sequence[RankRow]],
+    path: str | os.PathLike[str],
+    *,
+    time_unit: str | None,
+) -> None:
+    """PA against throughput per scale (95 % CIs as bars), P95 as colour, the Pareto front joined.
+
+    ``ranked``: each scale's ``rank_conditions`` rows; one panel per scale.
+    """
+    plt = pyplot()
+    panels = len(ranked)
+    fig, axes = plt.subplots(1, panels, figsize=(5.2 * panels, 4.4), squeeze=False)
+    try:
+        for ax, (scale, rows) in zip(axes[0], ranked.items(), strict=True):
+            x = _floats(row.throughput.value for row in rows)
+            y = _floats(row.pa.value for row in rows)
+            colour = _floats(row.p95.value for row in rows)
+            for row, xi, yi in zip(rows, x, y, strict=True):
+                xs, ys = row.throughput.confidence_interval, row.pa.confidence_interval
+                if None not in (xs.low, xs.high, ys.low, ys.high):
+                    ax.errorbar(
+                        xi, yi, xerr=[[xi - xs.low], [xs.high - xi]],
+                        yerr=[[yi - ys.low], [ys.high - yi]], color="0.6", lw=0.8, zorder=1,
+                    )  # fmt: skip
+                ax.annotate(
+                    row.condition.split(":")[0], (xi, yi), textcoords="offset points",
+                    xytext=(5, 4), fontsize=8,
+                )  # fmt: skip
+            front = sorted((xi, yi) for row, xi, yi in zip(rows, x, y, strict=True) if row.pareto)
+            if len(front) > 1:
+                ax.plot(*zip(*front, strict=True), ls="--", color="tab:red", lw=1, zorder=1)
+            points = ax.scatter(x, y, c=colour, cmap="viridis", s=50, zorder=2, edgecolors="k")
+            fig.colorbar(points, ax=ax, label=metric_label("p95_latency", time_unit))
+            ax.set_xlabel(metric_label("throughput", time_unit))
+            ax.set_ylabel("PA (5-50 %)")
+            ax.set_title(scale, fontsize=10)
+            ax.grid(alpha=0.3)
+        fig.suptitle(
+            "PA against throughput (95 % CIs); dashed: the Pareto front; colour: P95", fontsize=10
+        )
         _save(fig, path)
     finally:
         plt.close(fig)

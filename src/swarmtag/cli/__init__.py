@@ -30,10 +30,12 @@ def main(argv: Sequence[str] | None = None) -> None:
     try:
         try:
             from swarmtag.cli._main import run  # noqa: PLC0415 - numpy, click, rich load here
-        except (KeyboardInterrupt, ImportError, SyntaxError) as error:
+        except (KeyboardInterrupt, ImportError, SyntaxError, RuntimeError) as error:
             # A Ctrl-C inside a C extension's import (numpy's) or while a source is compiled
             # (a fresh checkout has no bytecode yet; "\N{...}" loads unicodedata) surfaces
-            # as an ImportError or SyntaxError: with the interrupt flagged, it is the Ctrl-C.
+            # as an ImportError or SyntaxError, and inside a class's creation (a dataclass
+            # field's __set_name__) as a RuntimeError: with the interrupt flagged, it is the
+            # Ctrl-C.
             if not isinstance(error, KeyboardInterrupt) and not interrupted():
                 raise
             acknowledge()

@@ -36,7 +36,7 @@ def policies_cmd() -> None:
     for column in ("name", "kind", "definition", "parameter", "reference", "runs on", "talks"):
         table.add_column(column, overflow="fold")
     for info in CATALOGUE:
-        parameter = f"{info.parameter}: {info.allowed}" if info.parameter else "-"
+        parameter = "; ".join(f"{name}: {allowed}" for name, allowed in info.parameters) or "-"
         table.add_row(
             info.form,
             info.kind,

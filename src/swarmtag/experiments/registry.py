@@ -29,6 +29,7 @@ STUDIES: Final = MappingProxyType(
         "physical-style": "physical-style.toml",
         "scalability": "scalability.toml",
         "warehouse": "warehouse.toml",
+        "allocators": "allocators.toml",
     }
 )
 """Shipped studies: SPEC §6's in the order of its table, then the others; name -> file."""
@@ -42,7 +43,8 @@ REPRODUCED: Final = (
 """The studies of SPEC §6, which ``swarmtag reproduce`` runs by default.
 
 The warehouse study is left out: its hall runs dozens of robots for minutes
-of robot time, which would multiply the time of a quick reproduction.
+of robot time, which would multiply the time of a quick reproduction. So is
+the allocators study (docs/allocators.md), which compares other rules.
 """
 
 

@@ -9,7 +9,9 @@ choice statistics from the stored event tables) and ``figures/`` (PA curves and
 latency curves with bands, latency per urgency level, the parameter sweep
 where a study sweeps one policy). Studies with several swarm sizes also get
 the scalability table (relative changes signed so that positive is better)
-and one panel set per size. ``DIR/report.html`` collects everything with the
+and one panel set per size; a study with ``ranking = true`` gets its
+conditions ranked per size (``ranking.md``) and a Pareto figure
+(``pareto.png``). ``DIR/report.html`` collects everything with the
 study parameters, the code version and the wall time of the last run.
 A warehouse scale's KPIs (tables, figures) cover the orders placed after its
 warm-up (``runner.kpi_log``); its exported logs keep every order.
@@ -31,6 +33,7 @@ from swarmtag._outputs import OutputPlan
 from swarmtag.analysis import ConditionChoices, MetricsReport, choice_statistics, summarize
 from swarmtag.analysis.choice_tables import choices_html, choices_latex, choices_markdown
 from swarmtag.analysis.html import Section, write_html
+from swarmtag.analysis.ranking import rank_conditions, ranking_html, ranking_markdown
 from swarmtag.analysis.tables import (
     html_tables,
     latex_tables,
@@ -49,13 +52,18 @@ from swarmtag.experiments.runner import (
 )
 from swarmtag.experiments.spec import Scale, Study
 from swarmtag.experiments.store import ResultsStore
-from swarmtag.io import CarrierLog
+from swarmtag.io import CarrierLog, EventTable
 
 __all__ = ["REPORT_NAME", "RUN_RECORD", "StudyRecord", "write_report", "write_run_record"]
 
 REPORT_NAME: Final = "report.html"
 _SIGN_NOTE: Final = (
     "Relative changes are signed so that positive is better (a latency reduction is positive)."
+)
+_RANK_NOTE: Final = (
+    "Ranked by PA, ties by throughput; Pareto-optimal: no other condition has both a PA and "
+    "a throughput at least as large, one larger. Messages per delivery: the messages the "
+    "robots sent (allocators that talk) over the deliveries."
 )
 RUN_RECORD: Final = "run.json"
 """Per-study file written after a run: wall time, quick or full, runs computed and reused."""
@@ -128,6 +136,7 @@ class _ScaleResult:
     report: MetricsReport
     log: CarrierLog
     choices: tuple[ConditionChoices, ...]
+    events: EventTable
 
 
 def _scale_reports(
@@ -145,14 +154,15 @@ def _scale_reports(
         report = known.get(scale.key) or summarize(
             log, baseline=study.baseline, n_resamples=resamples, seed=study.seed
         )
+        events = store.load_events(key, study.conditions, runs)
         choices = choice_statistics(
-            store.load_events(key, study.conditions, runs),
+            events,
             log=log,
             conditions=[c.condition for c in report.conditions],
             n_resamples=resamples,
             seed=study.seed,
         )
-        reports[scale.key] = _ScaleResult(report=report, log=log, choices=choices)
+        reports[scale.key] = _ScaleResult(report=report, log=log, choices=choices, events=events)
     return reports
 
 
@@ -264,7 +274,29 @@ def _study_sections(
         sections.append(
             _scalability_section(target_dir, study, {k: r.report for k, r in reports.items()})
         )
+    if study.ranking:
+        sections.append(_ranking_section(target_dir, study, reports))
     return sections
+
+
+def _ranking_section(out_dir: Path, study: Study, reports: Mapping[str, _ScaleResult]) -> Section:
+    """The conditions ranked per scale (``ranking.md``) and the Pareto figure."""
+    from swarmtag.analysis.figures import pareto_figure  # noqa: PLC0415 - matplotlib extra
+
+    ranked = {key: rank_conditions(r.report, r.events) for key, r in reports.items()}
+    markdown = "\n".join(
+        ranking_markdown(rows, f"{study.name}, {key}") for key, rows in ranked.items()
+    )
+    atomic_write_bytes(out_dir / study.name / "ranking.md", (markdown + "\n" + _RANK_NOTE).encode())
+    figure = out_dir / study.name / "pareto.png"
+    units = {r.report.time_unit for r in reports.values()}
+    pareto_figure(ranked, figure, time_unit=units.pop() if len(units) == 1 else None)
+    return Section(
+        title=f"{study.name}: the conditions ranked",
+        paragraphs=[_RANK_NOTE],
+        tables_html=[ranking_html(rows) for rows in ranked.values()],
+        figures=[figure],
+    )
 
 
 def _scalability_section(

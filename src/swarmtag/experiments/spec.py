@@ -23,6 +23,7 @@ The file layout (every key but ``name``, ``conditions`` and ``runs`` optional)::
                                 # where numba is installed; the results are the same bytes)
     resamples = 10000           # bootstrap resamples of the metrics
     chunk_runs = 10             # runs per unit of work (results do not depend on it)
+    ranking = false             # the report's ranking table and Pareto figure of the conditions
     policy_files = ["rules.py:my_rule"]   # score rules of one's own, FILE relative to
                                 # this file; each adds a condition named after its function
 
@@ -82,6 +83,7 @@ _KEYS: Final = (
     "resamples",
     "chunk_runs",
     "policy_files",
+    "ranking",
     "scenario",
     "scales",
 )
@@ -216,6 +218,8 @@ class Study:
     source: str | None = field(default=None, compare=False)
     policy_files: tuple[str, ...] = ()
     """Score rules of one's own, ``FILE.py:FUNCTION`` with ``FILE`` absolute (loaded, checked)."""
+    ranking: bool = False
+    """The report ranks the conditions (a table and a Pareto figure per scale)."""
     rules_digest: str = field(default="", init=False, compare=False)
     """12 hex digits over the rule files' bytes and functions when loaded ('' without any):
     part of the store key (``study_key``), so an edited rule never reuses its old runs."""
@@ -324,6 +328,7 @@ class Study:
             scales=_scales(data, urgency, ticks, profile),
             source=source,
             policy_files=rules,
+            ranking=_flag(data.get("ranking", False), "ranking"),
         )
 
     def policies(self) -> tuple[Policy, ...]:
@@ -346,6 +351,13 @@ class Study:
     def run_count(self, *, quick: bool = False) -> int:
         """Runs per condition and scale: ``quick_runs`` under ``quick``, else ``runs``."""
         return self.quick_runs if quick else self.runs
+
+
+def _flag(value: object, key: str) -> bool:
+    if not isinstance(value, bool):
+        msg = f"{key}: {value!r} is not true or false"
+        raise StudyError(msg)
+    return value
 
 
 def _rules_digest(specs: tuple[str, ...]) -> str:

@@ -25,6 +25,15 @@ Urgency(alpha=0.7)
 
 from __future__ import annotations
 
+from swarmtag.policy._allocators import (
+    ADAPTIVE_START,
+    CBAA_ALPHA,
+    Adaptive,
+    Allocator,
+    Cbaa,
+    Oracle,
+    Threshold,
+)
 from swarmtag.policy._catalogue import CATALOGUE, RuleInfo
 from swarmtag.policy._check import RuleCheck, check_rule, load_checked_rule
 from swarmtag.policy._choose import Candidate, choose
@@ -46,11 +55,13 @@ from swarmtag.policy._rules import (
     registered_rule,
     rule_entry_points,
 )
-from swarmtag.policy._select import select
+from swarmtag.policy._select import best_of, select
 from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE, proximity_term
 
 __all__ = [
+    "ADAPTIVE_START",
     "CATALOGUE",
+    "CBAA_ALPHA",
     "CONTEXT",
     "EDF_KIND",
     "PROXIMITY_KIND",
@@ -59,15 +70,21 @@ __all__ = [
     "URGENCY_KIND",
     "URGENCY_SCALE",
     "WEIGHTED_KIND",
+    "Adaptive",
+    "Allocator",
     "Candidate",
+    "Cbaa",
     "Edf",
+    "Oracle",
     "Policy",
     "Proximity",
     "RuleCheck",
     "RuleInfo",
     "ScoreRule",
+    "Threshold",
     "Urgency",
     "Weighted",
+    "best_of",
     "check_rule",
     "choose",
     "kernel_score",

@@ -24,10 +24,8 @@ class RuleInfo:
     """``score``: a robot ranks its own candidates; ``allocator``: beyond one robot's view."""
     definition: str
     """What it does, with its formula."""
-    parameter: str | None
-    """Its one parameter's name, or None."""
-    allowed: str
-    """The parameter's allowed values (empty without one)."""
+    parameters: tuple[tuple[str, str], ...]
+    """Its parameters in condition-name order: ``(name, allowed values)`` each."""
     reference: str
     """Where it comes from."""
     backends: tuple[str, ...]
@@ -37,21 +35,33 @@ class RuleInfo:
 
     @property
     def form(self) -> str:
-        """The condition name's form, e.g. ``urgency:alpha=A``."""
-        if self.parameter is None:
+        """The condition name's form, e.g. ``urgency:alpha=A`` or ``cbaa:comm_range=C,loss=L``."""
+        if not self.parameters:
             return self.name
-        return f"{self.name}:{self.parameter}={self.parameter[0].upper()}"
+        listed = ",".join(f"{name}={_letter(name)}" for name, _ in self.parameters)
+        return f"{self.name}:{listed}"
+
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """The parameters' names, in condition-name order."""
+        return tuple(name for name, _ in self.parameters)
+
+
+def _letter(parameter: str) -> str:
+    """The placeholder of ``parameter`` in a form: its first letter, upper case."""
+    return parameter[0].upper()
 
 
 _EVERYWHERE: Final = ("reference", "fast", "bt")
+_REFERENCE: Final = ("reference",)
+_POSITIVE: Final = "a finite number > 0"
 
 CATALOGUE: Final[tuple[RuleInfo, ...]] = (
     RuleInfo(
         name="proximity",
         kind="score",
         definition="u_d = 9 * (1 - min(d / 3.6, 1)): the nearest carrier; urgency ignored",
-        parameter=None,
-        allowed="",
+        parameters=(),
         reference="the published study's baseline (docs/policy.md)",
         backends=_EVERYWHERE,
         communication=False,
@@ -60,8 +70,7 @@ CATALOGUE: Final[tuple[RuleInfo, ...]] = (
         name="urgency",
         kind="score",
         definition="u_c * (alpha + u_d): urgency weighed with nearness; larger alpha, urgency",
-        parameter="alpha",
-        allowed="a finite number > 0",
+        parameters=(("alpha", _POSITIVE),),
         reference="the published study's urgency-aware policy (docs/policy.md)",
         backends=_EVERYWHERE,
         communication=False,
@@ -70,8 +79,7 @@ CATALOGUE: Final[tuple[RuleInfo, ...]] = (
         name="edf",
         kind="score",
         definition="u_c: earliest deadline first, the most urgent carrier; ties to the nearer",
-        parameter=None,
-        allowed="",
+        parameters=(),
         reference="Liu and Layland, J. ACM 1973; here the ablation of urgency alone",
         backends=_EVERYWHERE,
         communication=False,
@@ -80,10 +88,49 @@ CATALOGUE: Final[tuple[RuleInfo, ...]] = (
         name="weighted",
         kind="score",
         definition="w * u_c + (1 - w) * u_d: 0 ranks like proximity, 1 by urgency alone",
-        parameter="w",
-        allowed="0 <= W <= 1",
+        parameters=(("w", "0 <= W <= 1"),),
         reference="the published study's preliminary sweep (docs/policy.md)",
         backends=_EVERYWHERE,
+        communication=False,
+    ),
+    RuleInfo(
+        name="threshold",
+        kind="allocator",
+        definition="take each candidate w.p. T(s) = s^2 / (s^2 + theta^2), s = u_c + 1; "
+        "the nearest taken; a declined one is passed over for the cooldown",
+        parameters=(("theta", _POSITIVE),),
+        reference="response threshold: Bonabeau, Theraulaz and Deneubourg, Proc. R. Soc. B 1996",
+        backends=_REFERENCE,
+        communication=False,
+    ),
+    RuleInfo(
+        name="oracle",
+        kind="allocator",
+        definition="central assignment of idle robots to waiting carriers with global "
+        "knowledge, maximising the summed u_c * (alpha + u_d); re-solved each tick",
+        parameters=(("alpha", _POSITIVE),),
+        reference="optimal assignment: Kuhn, Naval Res. Logist. Q. 1955 (scipy)",
+        backends=_REFERENCE,
+        communication=False,
+    ),
+    RuleInfo(
+        name="cbaa",
+        kind="allocator",
+        definition="consensus-based auction: bid u_c * (0.7 + u_d) on the best candidate, "
+        "share winning bids with robots in comm_range (each message lost w.p. loss)",
+        parameters=(("comm_range", "metres, a finite number > 0"), ("loss", "0 <= L < 1")),
+        reference="CBAA: Choi, Brunet and How, IEEE T-RO 2009",
+        backends=_REFERENCE,
+        communication=True,
+    ),
+    RuleInfo(
+        name="adaptive",
+        kind="allocator",
+        definition="u_c * (alpha_r + u_d), each robot's alpha_r lowered by gain on each race "
+        "it loses, drawn back to 0.7 by gain on each lift",
+        parameters=(("gain", "0 < G <= 1"),),
+        reference="this project (docs/allocators.md)",
+        backends=_REFERENCE,
         communication=False,
     ),
 )
@@ -105,13 +152,16 @@ def accepted_forms() -> str:
     "accepted forms: 'proximity', 'urgency:alpha=A' (A a finite "
     """
     forms = [
-        f"'{info.form}'" + (f" ({_described(info)})" if info.parameter else "")
+        f"'{info.form}'" + (f" ({_described(info)})" if info.parameters else "")
         for info in CATALOGUE
     ]
     return "accepted forms: " + ", ".join(forms)
 
 
 def _described(info: RuleInfo) -> str:
-    """``A a finite number > 0`` or ``0 <= W <= 1``: the allowed values, named by the letter."""
-    letter = (info.parameter or "")[:1].upper()
-    return info.allowed if letter in info.allowed else f"{letter} {info.allowed}"
+    """``A a finite number > 0`` or ``0 <= W <= 1``: the allowed values, named by their letters."""
+    parts = []
+    for name, allowed in info.parameters:
+        letter = _letter(name)
+        parts.append(allowed if letter in allowed.split() else f"{letter} {allowed}")
+    return "; ".join(parts)

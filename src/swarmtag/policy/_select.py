@@ -18,7 +18,7 @@ from swarmtag.errors import PolicyError
 from swarmtag.policy._policies import Policy
 from swarmtag.policy._terms import MAX_URGENCY, as_float_array
 
-__all__ = ["select"]
+__all__ = ["best_of", "select"]
 
 
 def _check_policy(policy: object) -> None:
@@ -120,9 +120,42 @@ def select(
 
     u, d, m = (np.broadcast_to(x, shape) for x in (u, d, m))
     scores = policy.scores(u, d, {"marker": m, **(context or {})})
+    return _best(scores, d, m, a, fresh=True)
+
+
+def best_of(
+    scores: npt.NDArray[np.float64],
+    *,
+    distance: npt.NDArray[np.float64],
+    marker: npt.NDArray[np.integer],
+    available: npt.NDArray[np.bool_] | None,
+) -> npt.NDArray[np.intp]:
+    """The index of the largest score along the last axis, by ``select``'s tie rule; -1 none.
+
+    For rules that compute their own scores (the allocators): ``scores``,
+    ``distance`` and ``marker`` (and ``available``) broadcast to one
+    ``(..., carriers)`` shape with at least one carrier; nothing is checked,
+    and no input is changed.
+    """
+    return _best(scores, distance, marker, available, fresh=False)
+
+
+def _best(
+    scores: npt.NDArray[np.float64],
+    distance: npt.NDArray[np.float64],
+    marker: npt.NDArray[np.integer],
+    available: npt.NDArray[np.bool_] | None,
+    *,
+    fresh: bool,
+) -> npt.NDArray[np.intp]:
+    """``best_of``; ``fresh``: ``scores`` is the caller's own new array, changed in place."""
+    shape = np.broadcast_shapes(scores.shape, distance.shape, marker.shape)
+    d, m = np.broadcast_to(distance, shape), np.broadcast_to(marker, shape)
+    if scores.shape != shape:
+        scores = np.broadcast_to(scores, shape)
+    a = None if available is None else np.broadcast_to(available, shape)
     if a is not None:
-        a = np.broadcast_to(a, shape)
-        if not (scores.flags.owndata and scores.flags.writeable):
+        if not (fresh and scores.flags.owndata and scores.flags.writeable):
             scores = scores.copy()
         np.copyto(scores, -np.inf, where=~a)
     tie = scores == scores.max(axis=-1, keepdims=True)

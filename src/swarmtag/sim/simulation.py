@@ -7,7 +7,7 @@ import warnings
 from swarmtag._checks import MAX_RUN_INDEX, check_int
 from swarmtag._resources import check_memory
 from swarmtag.errors import BackendFallback, ConfigError
-from swarmtag.policy import Policy
+from swarmtag.policy import Allocator, Policy
 from swarmtag.sim.backends import FAST, MAX_THREADS, REFERENCE, Backend, Batch, resolve_backend
 from swarmtag.sim.builtin.controller import BUILTIN
 from swarmtag.sim.config.scenario import Scenario
@@ -50,6 +50,19 @@ def backend_for(controller: Controller | str, backend: Backend | str | None) -> 
         _close(running, owned)
 
 
+def _allocating(running: Controller, policy: Allocator) -> Controller:
+    """The batch's allocating controller (``swarmtag.sim.allocators``); the built-in one only."""
+    if running is not BUILTIN:
+        name = getattr(running, "name", type(running).__name__)
+        msg = (
+            f"controller: allocator {policy.name!r} runs with the built-in controller, not {name!r}"
+        )
+        raise ConfigError(msg)
+    from swarmtag.sim.allocators import allocating_controller  # noqa: PLC0415 - on use
+
+    return allocating_controller(policy)
+
+
 def _runs_rule(chosen: Backend, policy: Policy) -> Backend:
     """``chosen``, or the reference backend where ``chosen`` is compiled and the rule is Python.
 
@@ -58,9 +71,14 @@ def _runs_rule(chosen: Backend, policy: Policy) -> Backend:
     checked: object = policy
     if chosen is not FAST or not isinstance(checked, Policy) or checked.compiled:
         return chosen
+    what = (
+        "is an allocator, which the compiled backend does not run"
+        if isinstance(checked, Allocator)
+        else "is Python code, which the compiled backend cannot call"
+    )
     msg = (
-        f"rule {policy.name!r} is Python code, which the compiled backend cannot call; "
-        "its runs go to the reference backend (the same results, slower: docs/performance.md)"
+        f"condition {policy.name!r} {what}; its runs go to the reference backend "
+        "(the same results, slower: docs/performance.md)"
     )
     warnings.warn(msg, BackendFallback, stacklevel=3)
     return REFERENCE
@@ -114,6 +132,8 @@ def simulate(
     running, owned = _controller(controller)
     try:
         chosen = _runs_rule(resolve_backend(backend, controller=running), policy)
+        if isinstance(policy, Allocator):
+            running = _allocating(running, policy)
         check_memory(
             f"{runs} runs of {scenario.robots} robots and {scenario.carriers} carriers",
             chosen.memory(scenario, runs, record=record),

@@ -8,6 +8,7 @@ errors, never a traceback.
 
 from __future__ import annotations
 
+import math
 from enum import Enum, EnumType
 from typing import Any, TypeVar, cast
 
@@ -18,6 +19,8 @@ __all__ = ["CheckedEnumType", "as_bytes", "check_int", "check_type", "describe"]
 _T = TypeVar("_T")
 _SHOWN: tuple[type, ...] = (int, float, complex, str, bytes, bytearray, type(None))
 _MAX_SHOWN = 40
+_LONGEST_CLOCK = 1e15
+"""Largest clock reading taken, seconds (31 million years: adding a hold stays exact enough)."""
 
 
 def describe(value: object) -> str:
@@ -43,6 +46,17 @@ def check_int(name: str, value: object, high: int, low: int = 0) -> int:
         span = f"{low}-{high}" if low >= 0 else f"{low} to {high}"
         raise FieldRangeError(f"{name}: {describe(value)} is not an integer in {span}")
     return value
+
+
+def check_clock(name: str, value: object) -> float:
+    """``value`` as a float if it is a finite real number (a clock reading), else an error."""
+    try:
+        seconds = float(value) if isinstance(value, int | float) else math.nan
+    except OverflowError:  # an int too large for a float
+        seconds = math.nan
+    if isinstance(value, bool) or not math.isfinite(seconds) or abs(seconds) > _LONGEST_CLOCK:
+        raise FieldRangeError(f"{name}: {describe(value)} is not a finite number of seconds")
+    return seconds
 
 
 def check_type(name: str, value: object, kind: type[_T]) -> _T:

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Final
 
 from swarmtag.errors import (
+    ClaimRefused,
     ForgedWrite,
     IllegalTransition,
     MalformedWrite,
@@ -37,6 +38,7 @@ ATT_ERRORS: Final[dict[type[WriteRejected], int]] = {
         RoleNotAllowed,
         IllegalTransition,
         WriterTableFull,
+        ClaimRefused,
     )
 }
 """The ATT error code a hardware tag answers for each refusal."""

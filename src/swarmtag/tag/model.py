@@ -20,10 +20,12 @@ from swarmtag.errors import (
     WriterTableFull,
     WrongTarget,
 )
-from swarmtag.tag._arguments import as_bytes, check_type
+from swarmtag.tag._arguments import as_bytes, check_clock, check_type
+from swarmtag.tag.claim import Claim, grant_claim, verify_claim
 from swarmtag.tag.codec import TagState
 from swarmtag.tag.lifecycle import apply_change
 from swarmtag.tag.record import MAX_WRITERS, TagRecord
+from swarmtag.tag.status import TagStatus
 from swarmtag.tag.write import check_site_key, verify
 
 __all__ = ["MemoryStore", "TagModel", "TagStore"]
@@ -87,6 +89,7 @@ class TagModel:
         self._record = check_type("record", record, TagRecord)
         self._key = check_site_key(site_key)
         self._store = _check_store(store)
+        self._claim: Claim | None = None
 
     @classmethod
     def provision(cls, state: TagState, *, site_key: bytes, store: TagStore) -> TagModel:
@@ -125,26 +128,61 @@ class TagModel:
         writer when ``MAX_WRITERS`` are already tracked is ``WriterTableFull``.
         """
         write = verify(message, self._key)  # refuses a message that is not bytes-like, too
+        last = self._admit(write.writer, write.counter, write.target)
+        new_state = apply_change(self._record.state, write.change, write.role)
+        self._room_for(write.writer, last)
+        self._persist(new_state, write.writer, write.counter)
+        if new_state.status is not TagStatus.AWAITING_PICKUP:
+            self._claim = None  # a claim ends with the wait it reserved
+        return new_state
+
+    def claim(self, message: bytes | bytearray | memoryview, *, now: float) -> Claim:
+        """Grant one claim write (``swarmtag.tag.claim``) at ``now`` (the tag's clock, s).
+
+        Checked like ``apply`` (MAC first, target, counter, writer table),
+        then ``grant_claim``; the counter is persisted, the claim kept in RAM.
+        Raises a ``WriteRejected`` (``ClaimRefused`` among them) otherwise.
+        """
+        now = check_clock("now", now)
+        write = verify_claim(message, self._key)
+        last = self._admit(write.writer, write.counter, write.target)
+        granted = grant_claim(write, status=self._record.state.status, held=self._claim, now=now)
+        self._room_for(write.writer, last)
+        self._persist(self._record.state, write.writer, write.counter)
+        self._claim = granted
+        return granted
+
+    def claim_at(self, now: float) -> Claim | None:
+        """The live claim at ``now``, or None (none granted, or ended)."""
+        now = check_clock("now", now)
+        if self._claim is not None and self._claim.seconds_left(now) == 0:
+            self._claim = None
+        return self._claim
+
+    def _admit(self, writer: int, counter: int, target: int) -> int | None:
+        """The writer's last counter, after refusing another tag's write or a replay."""
         state = self._record.state
-        if write.target != state.marker:
-            raise WrongTarget(f"the write is for tag {write.target}, this is tag {state.marker}")
-        last = self._record.counters.get(write.writer)
-        if last is not None and write.counter <= last:
+        if target != state.marker:
+            raise WrongTarget(f"the write is for tag {target}, this is tag {state.marker}")
+        last = self._record.counters.get(writer)
+        if last is not None and counter <= last:
             raise ReplayedWrite(
-                f"counter {write.counter} from writer {write.writer} is not above "
+                f"counter {counter} from writer {writer} is not above "
                 f"the highest seen ({last}): replay refused"
             )
-        new_state = apply_change(state, write.change, write.role)
+        return last
+
+    def _room_for(self, writer: int, last: int | None) -> None:
+        """Refuse a new writer when the writer table is full."""
         if last is None and len(self._record.counters) >= MAX_WRITERS:
             raise WriterTableFull(
-                f"tag {state.marker} already tracks {MAX_WRITERS} writers, the most it can; "
-                f"writer {write.writer} is new and refused (reuse a known writer id, or rotate "
+                f"tag {self._record.state.marker} already tracks {MAX_WRITERS} writers, the most "
+                f"it can; writer {writer} is new and refused (reuse a known writer id, or rotate "
                 "the site key and re-provision the tag)"
             )
-        new = TagRecord(
-            state=new_state,
-            counters={**self._record.counters, write.writer: write.counter},
-        )
+
+    def _persist(self, state: TagState, writer: int, counter: int) -> None:
+        """Save the new record first, then take it (a power loss keeps old or new)."""
+        new = TagRecord(state=state, counters={**self._record.counters, writer: counter})
         self._store.save(new.to_bytes())
         self._record = new
-        return new.state

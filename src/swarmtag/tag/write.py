@@ -44,7 +44,9 @@ __all__ = [
     "WRITE_VERSION",
     "Write",
     "WriteSigner",
+    "authenticated",
     "check_site_key",
+    "mac",
     "sign",
     "verify",
 ]
@@ -126,13 +128,12 @@ def sign(write: Write, key: bytes) -> bytes:
     return signed + _mac(check_role_key(key), signed)
 
 
-def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
-    """Check the MAC under the named role's key, then parse; raise a ``WriteRejected`` if bad.
+def authenticated(message: bytes | bytearray | memoryview, key: bytes) -> tuple[bytes, Role]:
+    """The signed 12 bytes of a 20-byte write whose MAC verifies, and the role it names.
 
-    ``key`` is the site key (what a tag holds). Only the role bits of byte 1
-    are read before the MAC has verified, to pick the role key; a write whose
-    MAC fails, or whose role bits name no role, is ``ForgedWrite``. After
-    that, ``MalformedWrite`` for a bad version, reserved bits or field.
+    Every write format shares this: the length, then the MAC under the key
+    of the role in byte 1's bits 0-1 (derived from the site key ``key``),
+    before anything else is read; ``MalformedWrite`` or ``ForgedWrite``.
     """
     data = as_bytes("message", message, MalformedWrite)
     if len(data) != WRITE_LENGTH:
@@ -144,12 +145,28 @@ def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
         _mac(derive_role_key(site_key, Role(role_bits)), signed), tag
     ):
         raise ForgedWrite("the write's MAC does not verify under the key of the role it names")
+    return signed, Role(role_bits)
+
+
+def mac(key: bytes, signed: bytes) -> bytes:
+    """The 8-byte MAC of the signed part of a write under a role key (HMAC-SHA256, truncated)."""
+    return _mac(check_role_key(key), signed)
+
+
+def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
+    """Check the MAC under the named role's key, then parse; raise a ``WriteRejected`` if bad.
+
+    ``key`` is the site key (what a tag holds). Only the role bits of byte 1
+    are read before the MAC has verified, to pick the role key; a write whose
+    MAC fails, or whose role bits name no role, is ``ForgedWrite``. After
+    that, ``MalformedWrite`` for a bad version, reserved bits or field.
+    """
+    signed, role = authenticated(message, key)
     version, flags = signed[0], signed[1]
     if version != WRITE_VERSION:
         raise MalformedWrite(f"write format version {version} is not supported (expected 1)")
     if flags & ~_KNOWN_BITS:
         raise MalformedWrite(f"flags byte 0x{flags:02x} sets reserved bits")
-    role = Role(role_bits)
     urgency, status, destination = signed[9], signed[10], signed[11]
     for bit, name, value in (
         (_URGENCY_BIT, "urgency", urgency),

@@ -41,6 +41,9 @@ In this order, for every robot at once (broken robots are the world's,
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Protocol
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -57,18 +60,52 @@ from swarmtag.sim.world.sensing import Senses
 from swarmtag.sim.world.urgency import waited
 from swarmtag.tag import TagStatus
 
-__all__ = ["decide"]
+__all__ = ["Chooser", "Selection", "decide"]
 
 _AWAITING = int(TagStatus.AWAITING_PICKUP)
 
 
-def _pursuit_checks(s: WorldState, params: Params, t: int, events: TickEvents) -> None:
+@dataclass(frozen=True, eq=False)
+class Selection:
+    """What a walking robot chooses from this tick, for an allocator (``Chooser``).
+
+    ``available`` (R, N, C): each walker's candidates as the built-in rule
+    has them (seen, last heard awaiting, not cooling down, a free face;
+    after a look round); ``distance`` (R, N, C): the distances the rule
+    scores (the camera's).
+    """
+
+    s: WorldState
+    senses: Senses
+    walkers: NDArray[np.bool_]
+    available: NDArray[np.bool_]
+    distance: Float
+    inputs: TickInputs
+    params: Params
+    t: int
+
+
+class Chooser(Protocol):
+    """An allocator's choice step: which carrier each walker takes (-1 none)."""
+
+    global_knowledge: bool
+    """Pursuits are checked against the tags' true status (a central system), not what
+    each robot heard."""
+
+    def __call__(self, selection: Selection) -> tuple[Int, NDArray[np.float64]]:
+        """Each robot's choice (R, N) and its candidate count for the ``candidates`` event."""
+        ...
+
+
+def _pursuit_checks(
+    s: WorldState, params: Params, t: int, events: TickEvents, *, told: bool = False
+) -> None:
     seeking = (s.mode == Mode.WALK) & (s.seek >= 0)
     pursuing = in_modes(s.mode, PURSUIT_MODES) | seeking
     if not pursuing.any():
         return
     target = np.where(seeking, s.seek, s.target)
-    heard = own(s.known_status, target)
+    heard = own(s.known_status, target) if not told else at_robots(s.status, target)
     abandon = pursuing & (heard != _AWAITING)
     timeout = pursuing & ~abandon & (t - s.pursuit_start >= params.timeout_ticks)
     events.add(EventKind.ABANDON, abandon, target, heard.astype(np.float64))
@@ -134,9 +171,11 @@ def _selection(
     *,
     senses: Senses,
     walkers: NDArray[np.bool_],
+    inputs: TickInputs,
     params: Params,
     t: int,
     events: TickEvents,
+    chooser: Chooser | None,
 ) -> None:
     if not walkers.any():
         return
@@ -155,21 +194,28 @@ def _selection(
         available = walkers[..., None] & senses.known & open_tags
         if params.look_ticks > 0:
             available = _look_round(s, walkers, available, t, params)
-    if not available.any():
+    if chooser is not None:
+        selection = Selection(s, senses, walkers, available, distance, inputs, params, t)
+        choice, candidates = chooser(selection)
+    elif not available.any():
         return
-    choice = select(
-        params.policy,
-        urgency=s.known_urgency,
-        distance=distance,
-        marker=params.markers,
-        available=available,
-        context=_context(s, params, t),
-    ).astype(np.int64)
+    else:
+        choice = select(
+            params.policy,
+            urgency=s.known_urgency,
+            distance=distance,
+            marker=params.markers,
+            available=available,
+            context=_context(s, params, t),
+        ).astype(np.int64)
+        candidates = available.sum(axis=-1).astype(np.float64)
     chosen = choice >= 0
+    if not chosen.any():
+        return
     rows, robots = grid(*choice.shape)
     heard = s.known_urgency[rows, robots, np.maximum(choice, 0)].astype(np.float64)
     events.add(EventKind.SELECT, chosen, choice, heard)
-    events.add(EventKind.CANDIDATES, chosen, choice, available.sum(axis=-1).astype(np.float64))
+    events.add(EventKind.CANDIDATES, chosen, choice, candidates)
     s.pursuit_start[chosen] = t
     if params.radio_search:  # a tag not seen yet is sought by its signal
         seek = chosen & ~own(senses.known, choice)
@@ -303,12 +349,21 @@ def decide(
     params: Params,
     t: int,
     events: TickEvents,
+    chooser: Chooser | None = None,
 ) -> None:
-    """Apply the decisions of tick ``t`` to ``s`` in place (``before``: the state at tick start)."""
-    _pursuit_checks(s, params, t, events)
+    """Apply the decisions of tick ``t`` to ``s`` in place (``before``: the state at tick start).
+
+    ``chooser``: an allocator's choice step in place of the policy's ``select``
+    (``swarmtag.sim.allocators``); everything else is the built-in controller's.
+    """
+    told = chooser is not None and chooser.global_knowledge
+    _pursuit_checks(s, params, t, events, told=told)
     _switch_taken_faces(s, params)
     walkers = (before.mode == Mode.WALK) & (s.mode == Mode.WALK)
-    _selection(s, senses=senses, walkers=walkers, params=params, t=t, events=events)
+    _selection(
+        s, senses=senses, walkers=walkers, inputs=inputs, params=params, t=t, events=events,
+        chooser=chooser,
+    )  # fmt: skip
 
     bumped = (s.contact != 0).any(axis=-1)
     walking = s.mode == Mode.WALK

@@ -20,6 +20,9 @@ Event kinds (the ``kind`` column), in the order they can happen in a tick:
                    urgency; ``robot`` is empty
 ``arrive``         a warehouse order was placed on a pick-up slot; ``value`` = its
                    urgency; ``robot`` is empty
+``messages``       an allocator that talks (CBAA): ``value`` = the messages the
+                   robot sent since its last ``messages`` event; ``carrier`` is
+                   empty (``swarmtag.sim.allocators.cbaa``)
 =================  ==========================================================
 
 Rows are sorted by run, time, kind (the order above), robot, carrier, so a
@@ -54,6 +57,7 @@ class EventKind(IntEnum):
     DELIVER = 8
     REPRIORITISE = 9
     ARRIVE = 10
+    MESSAGES = 11
 
     @property
     def label(self) -> str:

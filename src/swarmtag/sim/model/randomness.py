@@ -3,37 +3,41 @@
 Run ``i`` of master seed ``S`` owns independent generators
 ``np.random.default_rng(np.random.SeedSequence(S, spawn_key=(i, k)))``:
 
-==  =========  =============================================================
-k   stream     draws
-==  =========  =============================================================
-0   scene      the initial scene (``swarmtag.sim.model.scene``), never the policy
-1   motion     per tick ``standard_normal((N, 4))``: columns 0-1 a random-walk
-               direction, 2-3 a sidestep direction (each normalised)
-2   breakdown  per tick ``random(N)``: robot ``r`` breaks down if < p
-3   radio      per tick ``random((N, C))``: robot ``r`` misses carrier ``c``'s
-               advertisement if < p
-4   camera     per tick ``standard_normal((N, C, 2))``: detection noise,
-               times sigma, added to carrier ``c``'s position as seen by ``r``
-5   walk       per tick ``random(N)``: robot ``r``'s walk turn angle
-               ``(2u - 1) * a`` for the largest turn ``a`` (a curved walk:
-               its largest turn per tick), as the unit vector ``(cos, sin)``
-               (the one place an angle meets a transcendental function,
-               outside every kernel)
-6   sight      per tick ``random((N, C))``: with a camera fade, robot ``r``
-               sees carrier ``c`` only within ``far - u * fade``
-               (``camera_far``: the range plus half the fade), a linear
-               detection ramp centred on the camera range
-7   rssi       per tick ``standard_normal((N, C))``: with BLE-led search,
-               the distance robot ``r`` reads from carrier ``c``'s RSSI is
-               the true one times ``10 ** (g * rssi_sigma)`` (``rssi_factors``,
-               outside every kernel like the walk's turns)
-8   odometry   per tick ``standard_normal((N, 2))``: with odometry drift,
-               robot ``r``'s odometry error grows by ``g * drift *
-               sqrt(moved)`` (``moved``: metres driven since last tick)
-==  =========  =============================================================
+==  ==========  =============================================================
+k   stream      draws
+==  ==========  =============================================================
+0   scene       the initial scene (``swarmtag.sim.model.scene``), never the policy
+1   motion      per tick ``standard_normal((N, 4))``: columns 0-1 a random-walk
+                direction, 2-3 a sidestep direction (each normalised)
+2   breakdown   per tick ``random(N)``: robot ``r`` breaks down if < p
+3   radio       per tick ``random((N, C))``: robot ``r`` misses carrier ``c``'s
+                advertisement if < p
+4   camera      per tick ``standard_normal((N, C, 2))``: detection noise,
+                times sigma, added to carrier ``c``'s position as seen by ``r``
+5   walk        per tick ``random(N)``: robot ``r``'s walk turn angle
+                ``(2u - 1) * a`` for the largest turn ``a`` (a curved walk:
+                its largest turn per tick), as the unit vector ``(cos, sin)``
+                (the one place an angle meets a transcendental function,
+                outside every kernel)
+6   sight       per tick ``random((N, C))``: with a camera fade, robot ``r``
+                sees carrier ``c`` only within ``far - u * fade``
+                (``camera_far``: the range plus half the fade), a linear
+                detection ramp centred on the camera range
+7   rssi        per tick ``standard_normal((N, C))``: with BLE-led search,
+                the distance robot ``r`` reads from carrier ``c``'s RSSI is
+                the true one times ``10 ** (g * rssi_sigma)`` (``rssi_factors``,
+                outside every kernel like the walk's turns)
+8   odometry    per tick ``standard_normal((N, 2))``: with odometry drift,
+                robot ``r``'s odometry error grows by ``g * drift *
+                sqrt(moved)`` (``moved``: metres driven since last tick)
+9   allocation  per tick ``random((N, C + N))``: under an allocator that draws
+                (``swarmtag.sim.allocators``), columns ``0 .. C-1`` robot
+                ``r``'s draw for carrier ``c`` (the response threshold's),
+                ``C + j`` for its message to robot ``j`` (CBAA's loss)
+==  ==========  =============================================================
 
 Every tick draws the full block of each stream, used or not, so no number
-depends on what other robots did. Streams 2-8 are only drawn when their
+depends on what other robots did. Streams 2-9 are only drawn when their
 option is on; being separate streams, switching one on changes no other
 number. Blocks for many ticks are drawn at once (``chunk``), which gives the
 same numbers as drawing tick by tick. A normalised direction is
@@ -87,6 +91,7 @@ class Stream(IntEnum):
     SIGHT = 6
     RSSI = 7
     ODOMETRY = 8
+    ALLOCATION = 9
 
 
 def check_seed(seed: object) -> int:
@@ -164,7 +169,9 @@ class TickInputs:
     (``None``: ``camera_range``, a hard disc); ``rssi`` (R, N, C) the error
     factor of the distance each robot reads from each tag's RSSI (``None``:
     exact, or no BLE-led search); ``odometry`` (R, N, 2) the Gaussian
-    numbers of each robot's odometry error this tick (``None``: no drift).
+    numbers of each robot's odometry error this tick (``None``: no drift);
+    ``allocation`` (R, N, C + N) an allocator's uniform numbers (``None``:
+    none drawn).
     """
 
     walk: Float
@@ -176,6 +183,7 @@ class TickInputs:
     sight: Float | None = None
     rssi: Float | None = None
     odometry: Float | None = None
+    allocation: Float | None = None
     writes: tuple[Reprioritisation, ...] = ()
 
     @classmethod
@@ -241,6 +249,8 @@ class RandomSource:
             self._purposes[Stream.RSSI] = (n, c)
         if params.odometry_drift > 0:
             self._purposes[Stream.ODOMETRY] = (n, 2)
+        if getattr(params.policy, "draws", False):
+            self._purposes[Stream.ALLOCATION] = (n, c + n)
         if chunk is None:
             largest = max(int(np.prod(shape)) for shape in self._purposes.values())
             chunk = max(1, min(_MAX_CHUNK, _BLOCK_BYTES // (8 * largest)))
@@ -258,7 +268,13 @@ class RandomSource:
 
     def _draw(self, ticks: int) -> None:
         for purpose, shape in self._purposes.items():
-            uniform = purpose in (Stream.BREAKDOWN, Stream.RADIO, Stream.WALK, Stream.SIGHT)
+            uniform = purpose in (
+                Stream.BREAKDOWN,
+                Stream.RADIO,
+                Stream.WALK,
+                Stream.SIGHT,
+                Stream.ALLOCATION,
+            )
             blocks = [
                 g.random((ticks, *shape)) if uniform else g.standard_normal((ticks, *shape))
                 for g in self._generators[purpose]
@@ -278,7 +294,7 @@ class RandomSource:
             self._first, row = tick, 0
         motion = self._blocks[Stream.MOTION][row]
         params = self._params
-        heard = noise = turn = sight = rssi = odometry = None
+        heard = noise = turn = sight = rssi = odometry = allocation = None
         breakdown = np.zeros(motion.shape[:2], dtype=bool)
         if Stream.BREAKDOWN in self._blocks:
             breakdown = self._blocks[Stream.BREAKDOWN][row] < params.breakdown
@@ -294,6 +310,8 @@ class RandomSource:
             rssi = rssi_factors(self._blocks[Stream.RSSI][row], params)
         if Stream.ODOMETRY in self._blocks:
             odometry = self._blocks[Stream.ODOMETRY][row]
+        if Stream.ALLOCATION in self._blocks:
+            allocation = self._blocks[Stream.ALLOCATION][row]
         return TickInputs(
             walk=unit_vectors(motion[..., 0:2]),
             sidestep=unit_vectors(motion[..., 2:4]),
@@ -304,5 +322,6 @@ class RandomSource:
             sight=sight,
             rssi=rssi,
             odometry=odometry,
+            allocation=allocation,
             writes=due_writes(params, tick),
         )
