@@ -31,13 +31,14 @@ def test_every_rule_is_listed_with_its_form_reference_and_backends():
         "threshold:theta=T",
         "oracle:alpha=A",
         "cbaa:comm_range=C,loss=L",
+        "claim:hold=H,loss=L",
         "adaptive:gain=G",
     ]
 
 
 def test_the_catalogue_is_what_condition_names_accept():
     for info in CATALOGUE:
-        values = ",".join(f"{name}=0.5" for name in info.parameter_names)
+        values = ",".join(f"{name}={1 if name == 'hold' else 0.5}" for name in info.parameter_names)
         name = f"{info.name}:{values}" if values else info.name
         assert parse_policy(name).name.split(":")[0] == info.name
 

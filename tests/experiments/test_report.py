@@ -140,3 +140,26 @@ def test_a_report_reuses_the_summaries_run_study_computed(tmp_path, monkeypatch)
     other = run_study(study, out_dir=tmp_path / "quick", workers=1, quick=True)
     with pytest.raises(AssertionError, match="computed again"):
         write_report(out, [study], computed=[other])
+
+
+def test_a_ranking_study_gets_the_ranking_table_and_the_pareto_figure(tmp_path):
+    import warnings
+
+    from swarmtag.errors import BackendFallback
+
+    from .helpers import small_study
+
+    study = small_study(
+        conditions=["proximity", "edf", "oracle:alpha=0.7"], ranking=True, runs=2, quick_runs=2
+    )
+    out = tmp_path / "out"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BackendFallback)
+        run_study(study, out_dir=out, workers=1)
+    html = write_report(out, [study]).read_text(encoding="utf-8")
+    ranking = (out / "small" / "ranking.md").read_text(encoding="utf-8")
+    rows = [line for line in ranking.splitlines() if line.startswith("| ") and "rank" not in line]
+    assert len(rows) == 3
+    assert {row.split(" | ")[1] for row in rows} == {"proximity", "edf", "oracle:alpha=0.7"}
+    assert (out / "small" / "pareto.png").stat().st_size > 10_000
+    assert "small: the conditions ranked" in html

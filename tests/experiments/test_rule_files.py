@@ -86,3 +86,18 @@ def test_spawned_workers_load_the_rule_and_agree_with_one_process(tmp_path):
         alone = run_study(study, out_dir=tmp_path / "one", quick=True, workers=1)
     spawned = run_study(study, out_dir=tmp_path / "two", quick=True, workers=2, backend="reference")
     assert spawned.metrics == alone.metrics
+
+
+def test_python_conditions_run_in_worker_processes_with_one_note(tmp_path, capsys):
+    from swarmtag.cli import main
+    from swarmtag.sim.backends import fast_available
+
+    if not fast_available():
+        pytest.skip("the routing is from the compiled backend's threads")
+    path = rule_study(tmp_path)
+    with pytest.raises(SystemExit) as ended:
+        main(["study", "run", str(path), "--quick", "--out", str(tmp_path / "out")])
+    assert ended.value.code == 0
+    err = capsys.readouterr().err
+    assert err.count("swarmtag: note:") == 1
+    assert "most_urgent: not compiled; their runs go to the reference backend" in err

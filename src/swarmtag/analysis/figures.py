@@ -163,9 +163,16 @@ def pareto_figure(
                         xi, yi, xerr=[[xi - xs.low], [xs.high - xi]],
                         yerr=[[yi - ys.low], [ys.high - yi]], color="0.6", lw=0.8, zorder=1,
                     )  # fmt: skip
+
+            labels: dict[tuple[int, int], tuple[float, float, list[str]]] = {}
+            span = (np.nanmax(x) - np.nanmin(x) or 1.0, np.nanmax(y) - np.nanmin(y) or 1.0)
+            for row, xi, yi in zip(rows, x, y, strict=True):  # points within 2 %: one label
+                cell = (round(40 * xi / span[0]), round(40 * yi / span[1]))
+                labels.setdefault(cell, (xi, yi, []))[2].append(row.condition.split(":")[0])
+            for xi, yi, names in labels.values():
                 ax.annotate(
-                    row.condition.split(":")[0], (xi, yi), textcoords="offset points",
-                    xytext=(5, 4), fontsize=8,
+                    " / ".join(names), (xi, yi), textcoords="offset points", xytext=(5, 4),
+                    fontsize=8,
                 )  # fmt: skip
             front = sorted((xi, yi) for row, xi, yi in zip(rows, x, y, strict=True) if row.pareto)
             if len(front) > 1:

@@ -5,8 +5,9 @@ and there is no one answer: urgency adherence and throughput pull apart.
 The table ranks the conditions by PA (the project's question), ties by
 throughput, and marks the **Pareto-optimal** ones: no other condition has a
 PA and a throughput at least as large, one of them larger. Messages per
-delivery are the ``messages`` events' sum over the condition's deliveries
-(allocators that talk; ``-`` for the others).
+delivery are the ``messages`` events' sum over the ``deliver`` events, both
+over whole runs (a warehouse's warm-up included; allocators that talk, ``-``
+for the others).
 """
 
 from __future__ import annotations
@@ -19,20 +20,28 @@ import numpy as np
 
 from swarmtag.analysis.bootstrap import Estimate
 from swarmtag.analysis.summary import MetricsReport
-from swarmtag.analysis.tables import format_interval, format_number, html_table, markdown_table
+from swarmtag.analysis.tables import (
+    format_interval,
+    format_number,
+    html_table,
+    markdown_table,
+    metric_label,
+)
 from swarmtag.io import EventTable
 
 __all__ = ["RankRow", "rank_conditions", "ranking_html", "ranking_markdown"]
 
-_HEADER = (
-    "rank",
-    "condition",
-    "PA [95 % CI]",
-    "throughput [95 % CI]",
-    "P95 latency [95 % CI]",
-    "messages per delivery",
-    "Pareto-optimal",
-)
+
+def _header(time_unit: str | None) -> tuple[str, ...]:
+    return (
+        "rank",
+        "condition",
+        "PA [95 % CI]",
+        f"{metric_label('throughput', time_unit)} [95 % CI]",
+        f"{metric_label('p95_latency', time_unit)} [95 % CI]",
+        "messages per delivery",
+        "Pareto-optimal",
+    )
 
 
 @dataclass(frozen=True)
@@ -63,11 +72,12 @@ def rank_conditions(report: MetricsReport, events: EventTable | None = None) -> 
     for statistics in report.conditions:
         messages = None
         if events is not None:
-            mine = (events.condition == statistics.condition) & (events.kind == "messages")
-            if mine.any():
-                sent = float(events.value[mine].sum())
-                delivered = statistics.kpis.total_deliveries
-                messages = sent / delivered if delivered else math.inf
+            mine = events.condition == statistics.condition
+            sent = mine & (events.kind == "messages")
+            if sent.any():
+                delivered = int((mine & (events.kind == "deliver")).sum())
+                total = float(events.value[sent].sum())
+                messages = total / delivered if delivered else math.inf
         rows.append(
             (
                 statistics.condition,
@@ -112,11 +122,12 @@ def _cells(row: RankRow) -> list[str]:
     ]
 
 
-def ranking_markdown(rows: Sequence[RankRow], title: str) -> str:
+def ranking_markdown(rows: Sequence[RankRow], title: str, *, time_unit: str | None) -> str:
     """The ranking as a Markdown table under ``title``."""
-    return f"### {title}\n\n" + markdown_table(_HEADER, [_cells(row) for row in rows]) + "\n"
+    table = markdown_table(_header(time_unit), [_cells(row) for row in rows])
+    return f"### {title}\n\n{table}\n"
 
 
-def ranking_html(rows: Sequence[RankRow]) -> str:
+def ranking_html(rows: Sequence[RankRow], *, time_unit: str | None) -> str:
     """The ranking as an HTML table."""
-    return html_table(_HEADER, [_cells(row) for row in rows])
+    return html_table(_header(time_unit), [_cells(row) for row in rows])

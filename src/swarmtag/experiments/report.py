@@ -284,17 +284,19 @@ def _ranking_section(out_dir: Path, study: Study, reports: Mapping[str, _ScaleRe
     from swarmtag.analysis.figures import pareto_figure  # noqa: PLC0415 - matplotlib extra
 
     ranked = {key: rank_conditions(r.report, r.events) for key, r in reports.items()}
+    units = {key: r.report.time_unit for key, r in reports.items()}
     markdown = "\n".join(
-        ranking_markdown(rows, f"{study.name}, {key}") for key, rows in ranked.items()
+        ranking_markdown(rows, f"{study.name}, {key}", time_unit=units[key])
+        for key, rows in ranked.items()
     )
     atomic_write_bytes(out_dir / study.name / "ranking.md", (markdown + "\n" + _RANK_NOTE).encode())
     figure = out_dir / study.name / "pareto.png"
-    units = {r.report.time_unit for r in reports.values()}
-    pareto_figure(ranked, figure, time_unit=units.pop() if len(units) == 1 else None)
+    shared = set(units.values())
+    pareto_figure(ranked, figure, time_unit=shared.pop() if len(shared) == 1 else None)
     return Section(
         title=f"{study.name}: the conditions ranked",
         paragraphs=[_RANK_NOTE],
-        tables_html=[ranking_html(rows) for rows in ranked.values()],
+        tables_html=[ranking_html(rows, time_unit=units[key]) for key, rows in ranked.items()],
         figures=[figure],
     )
 

@@ -23,8 +23,11 @@ A warehouse scale's summaries cover the orders placed after its warm-up
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import os
+import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
@@ -37,13 +40,14 @@ from swarmtag._inputs import check_path
 from swarmtag._resources import check_memory
 from swarmtag.analysis import MetricsReport, summarize, trim_warmup
 from swarmtag.analysis.resampling import bootstrap_memory
-from swarmtag.errors import ConfigError, StatisticsError, StudyError
+from swarmtag.errors import BackendFallback, ConfigError, StatisticsError, StudyError
 from swarmtag.experiments.chunks import ChunkJob, ChunkResult, split_runs
 from swarmtag.experiments.execute import run_dask, run_local
 from swarmtag.experiments.spec import Scale, Study
 from swarmtag.experiments.store import ResultsStore, RunKey
 from swarmtag.io import CarrierLog
-from swarmtag.sim.backends import resolve_backend
+from swarmtag.policy import parse_policy
+from swarmtag.sim.backends import REFERENCE, resolve_backend
 from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER
 
 __all__ = [
@@ -229,6 +233,31 @@ def _prepare_folder(folder: Path, name: str) -> None:
         raise StudyError(msg) from None
 
 
+def _by_kernel(jobs: Sequence[ChunkJob]) -> tuple[list[ChunkJob], list[ChunkJob]]:
+    """The jobs the compiled kernel runs, and the others on the reference backend, one thread.
+
+    A rule of one's own or an allocator is Python (``Policy.compiled``): its
+    chunks go to worker processes instead of this process's kernel threads,
+    and the fallback is said once (``BackendFallback``).
+    """
+    compiled, python = [], []
+    told: list[str] = []
+    for job in jobs:
+        if parse_policy(job.condition).compiled:
+            compiled.append(job)
+            continue
+        if job.condition not in told:
+            told.append(job.condition)
+        python.append(dataclasses.replace(job, backend=REFERENCE.name, threads=None))
+    if told:
+        msg = (
+            f"{', '.join(sorted(told))}: not compiled; their runs go to the reference backend "
+            "in worker processes (the same results, slower: docs/performance.md)"
+        )
+        warnings.warn(msg, BackendFallback, stacklevel=3)
+    return compiled, python
+
+
 def _execution(
     study: Study, backend: str | None, scheduler: str | None, workers: int | None
 ) -> tuple[str | None, int | None]:
@@ -347,7 +376,9 @@ def run_study(
                 if scheduler is not None:
                     run_dask(jobs, scheduler, store_chunk)
                 elif in_threads:
-                    run_local(jobs, 1, store_chunk)  # each chunk's runs on the threads
+                    compiled, python = _by_kernel(jobs)
+                    run_local(compiled, 1, store_chunk)  # each chunk's runs on the threads
+                    run_local(python, workers or os.cpu_count() or 1, store_chunk)
                 else:
                     run_local(jobs, workers or os.cpu_count() or 1, store_chunk)
             resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples

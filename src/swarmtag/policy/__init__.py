@@ -28,9 +28,11 @@ from __future__ import annotations
 from swarmtag.policy._allocators import (
     ADAPTIVE_START,
     CBAA_ALPHA,
+    CLAIM_ALPHA,
     Adaptive,
     Allocator,
     Cbaa,
+    ClaimFirst,
     Oracle,
     Threshold,
 )
@@ -62,6 +64,7 @@ __all__ = [
     "ADAPTIVE_START",
     "CATALOGUE",
     "CBAA_ALPHA",
+    "CLAIM_ALPHA",
     "CONTEXT",
     "EDF_KIND",
     "PROXIMITY_KIND",
@@ -74,6 +77,7 @@ __all__ = [
     "Allocator",
     "Candidate",
     "Cbaa",
+    "ClaimFirst",
     "Edf",
     "Oracle",
     "Policy",

@@ -14,6 +14,11 @@ Each still has a score, the one its robots rank their own candidates with.
 - ``Cbaa(comm_range, loss)``: the consensus-based bundle auction with one
   task per robot (Choi, Brunet and How 2009) over a robot-to-robot radio:
   bids ``u_c * (0.7 + u_d)``;
+- ``ClaimFirst(hold, loss)``: the urgency score (alpha 0.7) with claims
+  through the tags (the protocol's extension, ``swarmtag.tag.claim``): a
+  robot that chooses a carrier claims it for ``hold`` seconds (a write,
+  lost with probability ``loss``); robots that heard a live claim of
+  another pass that carrier over;
 - ``Adaptive(gain)``: the urgency score with each robot's own alpha,
   lowered by ``gain`` on each race it loses and drawn back to 0.7 by
   ``gain`` on each lift it wins.
@@ -30,11 +35,24 @@ import numpy.typing as npt
 from swarmtag.errors import PolicyError
 from swarmtag.policy._policies import Policy, Urgency, _real
 from swarmtag.policy._terms import formula
+from swarmtag.tag.claim import MAX_HOLD
 
-__all__ = ["ADAPTIVE_START", "CBAA_ALPHA", "Adaptive", "Allocator", "Cbaa", "Oracle", "Threshold"]
+__all__ = [
+    "ADAPTIVE_START",
+    "CBAA_ALPHA",
+    "CLAIM_ALPHA",
+    "Adaptive",
+    "Allocator",
+    "Cbaa",
+    "ClaimFirst",
+    "Oracle",
+    "Threshold",
+]
 
 CBAA_ALPHA = 0.7
 """The alpha of CBAA's bids: the published urgency policy's."""
+CLAIM_ALPHA = 0.7
+"""The alpha of the claiming robots' score: the published urgency policy's."""
 ADAPTIVE_START = 0.7
 """Where an adaptive robot's alpha starts and returns to: the published policy's."""
 
@@ -152,12 +170,7 @@ class Cbaa(Allocator):
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "comm_range", _positive("comm_range", self.comm_range))
-        allowed = "a number with 0 <= loss < 1"
-        loss = _real("loss", self.loss, allowed)
-        if not 0.0 <= loss < 1.0:
-            msg = f"loss: {loss!r} must be {allowed}"
-            raise PolicyError(msg)
-        object.__setattr__(self, "loss", loss)
+        object.__setattr__(self, "loss", _loss(self.loss))
 
     @property
     def name(self) -> str:
@@ -173,6 +186,51 @@ class Cbaa(Allocator):
         self, urgency: npt.NDArray[np.float64], distance: npt.NDArray[np.float64]
     ) -> npt.NDArray[np.float64]:
         return _urgency_score(CBAA_ALPHA, urgency, distance)
+
+
+def _loss(value: object) -> float:
+    allowed = "a number with 0 <= loss < 1"
+    loss = _real("loss", value, allowed)
+    if not 0.0 <= loss < 1.0:
+        msg = f"loss: {loss!r} must be {allowed}"
+        raise PolicyError(msg)
+    return loss
+
+
+@dataclass(frozen=True, slots=True)
+class ClaimFirst(Allocator):
+    """Claims through the tag: choose by the urgency score, claim for ``hold`` s, skip claims.
+
+    >>> ClaimFirst(hold=30, loss=0.1).name
+    'claim:hold=30.0,loss=0.1'
+    """
+
+    hold: float
+    loss: float
+
+    def __post_init__(self) -> None:
+        allowed = "a number of seconds, 1 <= hold <= 255"
+        hold = _real("hold", self.hold, allowed)
+        if not 1.0 <= hold <= MAX_HOLD:
+            msg = f"hold: {hold!r} must be {allowed}"
+            raise PolicyError(msg)
+        object.__setattr__(self, "hold", hold)
+        object.__setattr__(self, "loss", _loss(self.loss))
+
+    @property
+    def name(self) -> str:
+        """``claim:hold=H,loss=P``."""
+        return f"claim:hold={self.hold!r},loss={self.loss!r}"
+
+    @property
+    def draws(self) -> bool:
+        """True: one uniform number per robot and carrier a tick (a claim write's loss)."""
+        return True
+
+    def _formula(
+        self, urgency: npt.NDArray[np.float64], distance: npt.NDArray[np.float64]
+    ) -> npt.NDArray[np.float64]:
+        return _urgency_score(CLAIM_ALPHA, urgency, distance)
 
 
 @dataclass(frozen=True, slots=True)

@@ -124,6 +124,16 @@ CATALOGUE: Final[tuple[RuleInfo, ...]] = (
         communication=True,
     ),
     RuleInfo(
+        name="claim",
+        kind="allocator",
+        definition="u_c * (0.7 + u_d), and the chosen carrier claimed through its tag for "
+        "hold s (a write lost w.p. loss); carriers another robot holds are passed over",
+        parameters=(("hold", "seconds, 1 <= H <= 255"), ("loss", "0 <= L < 1")),
+        reference="this project: the tag protocol's claim extension (docs/tag-protocol.md)",
+        backends=_REFERENCE,
+        communication=True,
+    ),
+    RuleInfo(
         name="adaptive",
         kind="allocator",
         definition="u_c * (alpha_r + u_d), each robot's alpha_r lowered by gain on each race "

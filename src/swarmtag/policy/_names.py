@@ -12,7 +12,7 @@ from collections.abc import Callable
 from typing import Final
 
 from swarmtag.errors import PolicyError
-from swarmtag.policy._allocators import Adaptive, Cbaa, Oracle, Threshold
+from swarmtag.policy._allocators import Adaptive, Cbaa, ClaimFirst, Oracle, Threshold
 from swarmtag.policy._catalogue import accepted_forms, rule_info
 from swarmtag.policy._policies import Edf, Policy, Proximity, Urgency, Weighted
 from swarmtag.policy._rules import registered_rule
@@ -36,6 +36,7 @@ _MAKERS: Final[dict[str, Callable[..., Policy]]] = {
     "threshold": Threshold,
     "oracle": Oracle,
     "cbaa": Cbaa,
+    "claim": ClaimFirst,
     "adaptive": Adaptive,
 }
 """Each catalogued rule's class, by name (called with its parameters as keywords)."""

@@ -51,3 +51,20 @@ def test_the_oracle_delivers_faster_than_proximity():
     }
     mean = {name: float((log.delivery_time - log.order_time).mean()) for name, log in logs.items()}
     assert mean["oracle:alpha=0.7"] < mean["proximity"]
+
+
+def test_claims_keep_other_robots_off_a_claimed_carrier_and_count_their_writes():
+    world = Scenario.from_mapping(
+        {**Scenario.default(7, 15, profile="paper-sim").to_mapping(), "ticks": 900}
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", BackendFallback)
+        check_determinism(world, parse_policy("claim:hold=30,loss=0.2"), seed=3, runs=2)
+    claims = simulate(world, parse_policy("claim:hold=30,loss=0"), seed=3, runs=4,
+                      backend="reference").events  # fmt: skip
+    plain = simulate(world, parse_policy("urgency:alpha=0.7"), seed=3, runs=4).events
+    writes = claims.take(claims.kind == "messages")
+    selects = claims.take(claims.kind == "select")
+    assert writes.value.sum() >= len(selects)  # a write for every choice (refused ones too)
+    # double pursuits end in an abandon: claims leave fewer of them than the plain policy
+    assert (claims.kind == "abandon").sum() < (plain.kind == "abandon").sum()

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from swarmtag.policy import ADAPTIVE_START, Adaptive, best_of, proximity_term
 from swarmtag.sim.allocators.base import AllocatorChooser
 from swarmtag.sim.builtin.decide import Selection
+from swarmtag.sim.model.events import TickEvents
 from swarmtag.sim.model.indexing import PURSUIT_MODES, in_modes, own
 from swarmtag.sim.model.params import Params
 from swarmtag.sim.model.state import Int, Mode, WorldState
@@ -58,9 +59,11 @@ class AdaptiveChooser(AllocatorChooser):
         ).astype(np.int64)
         return choice, selection.available.sum(axis=-1).astype(np.float64)
 
-    def settle(self, before: WorldState, s: WorldState, *, params: Params, t: int) -> None:
+    def settle(
+        self, before: WorldState, s: WorldState, *, params: Params, t: int, events: TickEvents
+    ) -> None:
         """Lower the alpha of robots that lost a race this tick; draw back those that lift."""
-        del params, t
+        del params, t, events
         alpha = self._alphas(s)
         was = in_modes(before.mode, PURSUIT_MODES)
         gave_up = was & (s.mode == Mode.WALK)

@@ -41,6 +41,8 @@ class AllocatorChooser:
         """Before the built-in decisions of tick ``t``."""
         del before, s, inputs, params, t, events
 
-    def settle(self, before: WorldState, s: WorldState, *, params: Params, t: int) -> None:
+    def settle(
+        self, before: WorldState, s: WorldState, *, params: Params, t: int, events: TickEvents
+    ) -> None:
         """After the decisions of tick ``t``."""
-        del before, s, params, t
+        del before, s, params, t, events

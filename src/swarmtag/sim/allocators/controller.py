@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from swarmtag.errors import ConfigError
-from swarmtag.policy import Adaptive, Allocator, Cbaa, Oracle, Threshold
+from swarmtag.policy import Adaptive, Allocator, Cbaa, ClaimFirst, Oracle, Threshold
 from swarmtag.sim.allocators.adaptive import AdaptiveChooser
 from swarmtag.sim.allocators.base import AllocatorChooser
 from swarmtag.sim.allocators.cbaa import CbaaChooser
+from swarmtag.sim.allocators.claim import ClaimChooser
 from swarmtag.sim.allocators.oracle import OracleChooser
 from swarmtag.sim.allocators.threshold import ThresholdChooser
 from swarmtag.sim.builtin.decide import decide
@@ -46,7 +47,7 @@ class AllocatingController:
             before, s, senses=senses, inputs=inputs, params=params, t=t, events=events,
             chooser=self.chooser,
         )  # fmt: skip
-        self.chooser.settle(before, s, params=params, t=t)
+        self.chooser.settle(before, s, params=params, t=t, events=events)
 
     def arrive(self, before: WorldState, s: WorldState, *, params: Params, t: int) -> Arrivals:
         """The built-in ``arrive``."""
@@ -68,6 +69,8 @@ def allocating_controller(policy: Allocator) -> AllocatingController:
         chooser = AdaptiveChooser(policy)
     elif isinstance(policy, Cbaa):
         chooser = CbaaChooser(policy)
+    elif isinstance(policy, ClaimFirst):
+        chooser = ClaimChooser(policy)
     else:
         msg = f"allocator {policy.name!r} has no controller in this version"
         raise ConfigError(msg)
