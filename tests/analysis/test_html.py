@@ -50,3 +50,14 @@ def test_tables_as_html_match_the_report(tmp_path):
     text = path.read_text(encoding="utf-8")
     assert text.startswith("<!DOCTYPE html>")
     assert text.count("<table>") == 3
+
+
+def test_a_figure_of_panels_side_by_side_gets_the_page_width(tmp_path):
+    from PIL import Image
+
+    wide, square = tmp_path / "pareto.png", tmp_path / "curves.png"
+    Image.new("RGB", (900, 300), "white").save(wide)
+    Image.new("RGB", (400, 300), "white").save(square)
+    doc = render_html("r", [Section("s", figures=[wide, square])], facts={})
+    figures = re.findall(r"<figure[^>]*>", doc)
+    assert figures == ['<figure class="wide">', "<figure>"]

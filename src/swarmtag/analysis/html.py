@@ -28,6 +28,7 @@ th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }
 th:first-child, td:first-child { text-align: left; }
 thead { background: #f3f3f3; } .note { color: #555; font-size: 0.85em; }
 figure { display: inline-block; margin: 0.5em; } img { max-width: 32em; }
+figure.wide { display: block; } figure.wide img { max-width: min(100%, 96em); }
 dl { display: grid; grid-template-columns: max-content auto; gap: 0.2em 1em; }
 dt { font-weight: bold; }
 """
@@ -46,10 +47,15 @@ class Section:
 
 
 def _figure(path: str | os.PathLike[str]) -> str:
-    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
+    raw = Path(path).read_bytes()
+    data = base64.b64encode(raw).decode("ascii")
     caption = html.escape(Path(path).stem.replace("_", " "))
+    # A PNG's IHDR holds width and height at bytes 16-23: a figure of panels side by side
+    # (wider than twice its height) gets the page's width rather than a thumbnail's.
+    wide = int.from_bytes(raw[16:20], "big") > 2 * int.from_bytes(raw[20:24], "big")
+    kind = ' class="wide"' if wide else ""
     return (
-        f'<figure><img alt="{caption}" src="data:image/png;base64,{data}">'
+        f'<figure{kind}><img alt="{caption}" src="data:image/png;base64,{data}">'
         f"<figcaption>{caption}</figcaption></figure>"
     )
 

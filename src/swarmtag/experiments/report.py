@@ -19,6 +19,7 @@ warm-up (``runner.kpi_log``); its exported logs keep every order.
 
 from __future__ import annotations
 
+import html
 import json
 import os
 from collections.abc import Mapping, Sequence
@@ -296,7 +297,10 @@ def _ranking_section(out_dir: Path, study: Study, reports: Mapping[str, _ScaleRe
     return Section(
         title=f"{study.name}: the conditions ranked",
         paragraphs=[_RANK_NOTE],
-        tables_html=[ranking_html(rows, time_unit=units[key]) for key, rows in ranked.items()],
+        tables_html=[
+            f"<h3>{html.escape(key)}</h3>" + ranking_html(rows, time_unit=units[key])
+            for key, rows in ranked.items()
+        ],
         figures=[figure],
     )
 
