@@ -120,7 +120,7 @@ def scenario_options(command: _F) -> _F:
         click.option(
             "--perception",
             type=click.Choice(PERCEPTION_MODELS),
-            help="split: radio and camera apart (SPEC §4.2a); disc: one detection radius.",
+            help="split: radio and camera apart (docs/simulator.md); disc: one detection radius.",
         ),
         click.option(
             "--detection-radius",

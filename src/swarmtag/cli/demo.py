@@ -54,7 +54,7 @@ _SITE_KEY = bytes.fromhex("00112233445566778899aabbccddeeff")
 
 
 def _payloads(console: Console) -> None:
-    table = Table(title="Tag advertisements (SPEC §2.1)")
+    table = Table(title="Tag advertisements (docs/tag-protocol.md)")
     for column in ("marker", "urgency", "status", "payload hex", "mapping form (bleak)"):
         table.add_column(column, no_wrap=True)
     for marker, urgency, status, _x, _y in _CARRIERS:
@@ -69,7 +69,7 @@ def _payloads(console: Console) -> None:
 
 
 def _writes(console: Console) -> None:
-    console.print("\n[bold]Authenticated writes (SPEC §2.3)[/bold] on tag 5:")
+    console.print("\n[bold]Authenticated writes (docs/tag-protocol.md)[/bold] on tag 5:")
     store = MemoryStore()
     start = TagState(urgency=9, status=TagStatus.AWAITING_PICKUP, destination=0, marker=5)
     tag = TagModel.provision(start, site_key=_SITE_KEY, store=store)
@@ -108,7 +108,7 @@ def _selection(console: Console) -> None:
     dx = np.array([c[3] for c in _CARRIERS]) - _ROBOT_XY[0]
     dy = np.array([c[4] for c in _CARRIERS]) - _ROBOT_XY[1]
     distance = np.sqrt(dx * dx + dy * dy)
-    table = Table(title=f"Carrier selection (SPEC §3.3) for a robot at {_ROBOT_XY} m")
+    table = Table(title=f"Carrier selection (docs/policy.md) for a robot at {_ROBOT_XY} m")
     table.add_column("marker", no_wrap=True)
     table.add_column("urgency")
     table.add_column("dist m")
@@ -136,7 +136,7 @@ def _selection(console: Console) -> None:
 
 def _metrics(console: Console) -> None:
     path = example_trial_path()
-    console.print(f"\n[bold]Metrics of a physical-style trial log (SPEC §5)[/bold]: {path}")
+    console.print(f"\n[bold]Metrics of a physical-style trial log (docs/metrics.md)[/bold]: {path}")
     console.print(f"  the same as: swarmtag metrics {path}\n")
     report = summarize(read_event_log(path), baseline=None, n_resamples=10_000, seed=0)
     render_report(report, console)

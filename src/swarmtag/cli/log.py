@@ -45,7 +45,7 @@ def log_group() -> None:
     "[default: the swarmtag_msgs layout].",
 )
 def import_cmd(bag: Path, *, events: Path, event_table: Path | None, mapping: Path | None) -> None:
-    """Turn the trials in a ROS 2 bag BAG into an event log (SPEC §8.1; the bags extra).
+    """Turn the trials in a ROS 2 bag BAG into an event log (docs/trial-logs.md; the bags extra).
 
     BAG is a rosbag2 folder (sqlite3 or MCAP storage), a .db3 file or an .mcap file
     (from ros2 bag record, or swarmtag simulate --mcap). Times are relative to each

@@ -1,4 +1,4 @@
-"""``swarmtag metrics EVENTS``: KPIs with bootstrap CIs, compared with a baseline (SPEC §8.2)."""
+"""``swarmtag metrics EVENTS``: KPIs with bootstrap CIs, compared with a baseline (docs/metrics.md)."""
 
 from __future__ import annotations
 
@@ -276,7 +276,7 @@ def _write_outputs(
     "operation, e.g. a warehouse run, over the orders placed after its warm-up.",
 )
 @click.option(
-    "--json", "as_json", is_flag=True, help="Print one JSON object (SPEC §8.2) instead of tables."
+    "--json", "as_json", is_flag=True, help="Print one JSON object (docs/metrics.md) instead of tables."
 )
 @click.option(
     "--event-table",

@@ -14,7 +14,7 @@ __all__ = ["robot"]
 
 @click.group("robot")
 def robot() -> None:
-    """The robot's controller (the behaviour tree of SPEC §3.2; the robot extra)."""
+    """The robot's controller (the behaviour tree of docs/controller.md; the robot extra)."""
 
 
 @robot.command("tree")

@@ -314,7 +314,7 @@ def _draw(
 @backend_option
 @baseline_option
 @resamples_option
-@click.option("--json", "as_json", is_flag=True, help="Print the KPI JSON of SPEC §8.2.")
+@click.option("--json", "as_json", is_flag=True, help="Print the KPI JSON (docs/metrics.md).")
 @click.option(
     "--progress/--no-progress",
     default=None,

@@ -37,7 +37,7 @@ progress_option = click.option(
 
 @click.group("study")
 def study() -> None:
-    """Run the studies of SPEC §6, or your own study files (see docs/experiments.md)."""
+    """Run the published studies, or your own study files (see docs/experiments.md)."""
 
 
 @study.command("run")
@@ -109,7 +109,7 @@ def _note(backends: Iterable[str | None], scheduler: str | None) -> None:
 
 
 def _studies(sources: Sequence[str], out_dir: Path | None) -> list[Any]:
-    """The studies named (shipped names or files); by default those of SPEC §6 (``REPRODUCED``).
+    """The studies named (shipped names or files); by default the published ones (``REPRODUCED``).
 
     With ``out_dir`` (``study report``) the default is every shipped study with results there.
     """
@@ -170,7 +170,7 @@ def report_cmd(
     "sources",
     multiple=True,
     metavar="NAME|FILE",
-    help="Study to run, repeatable [default: the five studies of SPEC §6].",
+    help="Study to run, repeatable [default: the five published studies, docs/experiments.md].",
 )
 @click.option(
     "--out",

@@ -38,7 +38,7 @@ class ParamFields:
     turn_sin: float
     """Sine of the largest turn in one tick."""
     split: bool
-    """Split perception (radio and camera apart, SPEC §4.2a) rather than one disc."""
+    """Split perception (radio and camera apart, docs/simulator.md) rather than one disc."""
     camera_range: float
     """The camera's range (its 50 % distance with a fade), times the perception factor. [m]"""
     camera_fade: float

@@ -200,7 +200,7 @@ DERIVED: Final[tuple[KernelParameter, ...]] = (
         "split",
         bool,
         "",
-        "Split perception (radio and camera apart, SPEC §4.2a) rather than one disc.",
+        "Split perception (radio and camera apart, docs/simulator.md) rather than one disc.",
         lambda s: s.perception == "split",
     ),
     KernelParameter(
