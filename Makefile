@@ -29,8 +29,8 @@ demo: $(STAMP)
 	$(BIN)/swarmtag reproduce --quick --out $(DEMO_OUT)/reproduction
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks
-	$(BIN)/ruff format --check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks examples
+	$(BIN)/ruff format --check src tests benchmarks examples
 
 typecheck: $(STAMP)
 	$(BIN)/mypy

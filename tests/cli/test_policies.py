@@ -132,3 +132,21 @@ def test_policies_lists_the_rules_packages_register(monkeypatch):
     assert "FIFO: the carrier" in line
     assert "falls back" in line
     assert "--policy-file" in result.output
+
+
+ROOT = Path(__file__).parents[2]
+
+
+@pytest.mark.parametrize("name", ["urgency_first", "oldest_first"])
+def test_the_shipped_example_rules_pass_and_run_as_the_readme_says(capsys, monkeypatch, name):
+    monkeypatch.setattr(_rules, "_REGISTERED", {})  # the test rules use the same names
+    monkeypatch.chdir(ROOT)
+    code, out, err = run(capsys, "policy", "check", f"examples/rules.py:{name}")
+    assert code == 0, err
+    assert f"condition {name!r} can run" in out
+    code, out, err = run(
+        capsys, "simulate", *SMALL, "--runs", "2", "--condition", "proximity",
+        "--policy-file", f"examples/rules.py:{name}", "--json",
+    )  # fmt: skip
+    assert code == 0, err
+    assert [c["condition"] for c in json.loads(out)["conditions"]] == ["proximity", name]
