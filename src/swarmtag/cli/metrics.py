@@ -1,4 +1,4 @@
-"""``swarmtag metrics EVENTS``: KPIs with bootstrap CIs, compared with a baseline (docs/metrics.md)."""
+"""``swarmtag metrics EVENTS``: KPIs with bootstrap CIs, compared with a baseline."""
 
 from __future__ import annotations
 
@@ -276,7 +276,10 @@ def _write_outputs(
     "operation, e.g. a warehouse run, over the orders placed after its warm-up.",
 )
 @click.option(
-    "--json", "as_json", is_flag=True, help="Print one JSON object (docs/metrics.md) instead of tables."
+    "--json",
+    "as_json",
+    is_flag=True,
+    help="Print one JSON object instead of tables (docs/metrics.md).",
 )
 @click.option(
     "--event-table",

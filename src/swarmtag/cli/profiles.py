@@ -1,4 +1,4 @@
-"""``swarmtag profiles``: the shipped profiles (docs/simulator.md) side by side, or one profile in full."""
+"""``swarmtag profiles``: the shipped profiles side by side, or one profile in full."""
 
 from __future__ import annotations
 
