@@ -136,3 +136,14 @@ def test_comparing_different_resample_counts_is_refused():
         compare(other, base, "pa")
     with pytest.raises(StatisticsError, match="unknown metric"):
         compare(base, base, "speed")
+
+
+@pytest.mark.parametrize(("first", "second"), [(2, 2), (3, 3), (4, 6), (5, 5), (10, 10)])
+def test_the_smallest_mann_whitney_p_is_scipys_for_samples_that_do_not_overlap(first, second):
+    import scipy.stats
+
+    from swarmtag.analysis.compare import smallest_mann_whitney_p
+
+    low, high = np.arange(first, dtype=float), np.arange(second, dtype=float) + 100
+    exact = scipy.stats.mannwhitneyu(low, high, alternative="two-sided", method="exact").pvalue
+    assert smallest_mann_whitney_p(first, second) == pytest.approx(exact)

@@ -95,6 +95,8 @@ def test_json_has_exactly_the_contract_shape():
             "p_bootstrap",
             "p_mannwhitney",
             "undelivered_differs",
+            "underpowered",
+            "smallest_p_mannwhitney",
         ]
         assert comparison["baseline"] == "proximity"
         assert isinstance(comparison["undelivered_differs"], bool)

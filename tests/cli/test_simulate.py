@@ -249,3 +249,18 @@ def test_the_kernel_knows_it_is_compiled():
     with pytest.raises(SystemExit):
         main(run_once)
     assert kernel_compiled()
+
+
+@pytest.mark.parametrize(("runs", "weak"), [(3, True), (10, False)])
+def test_few_runs_mark_every_bootstrap_ci_and_p_underpowered(capsys, runs, weak):
+    code, out, _ = run(capsys, *SMALL, "--runs", str(runs), "--json")
+    assert code == 0
+    comparisons = json.loads(out)["comparisons"]
+    assert {c["underpowered"] for c in comparisons} == {weak}
+    if weak:
+        assert all(c["smallest_p_mannwhitney"] == pytest.approx(0.1) for c in comparisons)
+    code, out, _ = run(capsys, *SMALL, "--runs", str(runs))
+    assert ("underpowered" in out) is weak
+    assert ("\N{DOUBLE DAGGER}" in out) is weak
+    if weak:
+        assert "smallest possible p here is 0.1" in out

@@ -10,6 +10,13 @@ scipy's defaults) on the per-run values; runs without a value are left out,
 and the p-value is ``None`` when either side has no value at all, and for the
 Kaplan-Meier P95 (which has no per-run value).
 
+A comparison with fewer than ``MIN_RUNS`` runs on either side is
+**underpowered**: the bootstrap over so few whole runs gives intervals too
+narrow and p-values that reach 0, while the exact two-sided Mann-Whitney
+test cannot go below ``smallest_mann_whitney_p(n1, n2) = 2 / C(n1 + n2,
+n1)`` (0.33 at 2 runs each, 0.1 at 3, 1.1e-5 at 10): Mann-Whitney is then
+the reference, and every output says "underpowered".
+
 Every comparison also says whether the two conditions left different shares
 of their carriers undelivered (``undelivered_differs``): then delivered-only
 latency compares different sets of carriers and is biased, and the censored
@@ -19,7 +26,9 @@ companions are the ones to read.
 from __future__ import annotations
 
 import importlib
+import math
 from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -33,13 +42,31 @@ from swarmtag.analysis.kpis import ConditionKPIs
 from swarmtag.errors import StatisticsError
 
 __all__ = [
+    "MIN_RUNS",
     "Comparison",
     "bootstrap_p_value",
     "compare",
     "compare_all",
     "mann_whitney_p",
+    "smallest_mann_whitney_p",
     "undelivered_differs",
 ]
+
+MIN_RUNS: Final = 10
+"""Fewer runs per condition than this make a comparison underpowered (module docstring)."""
+
+
+def smallest_mann_whitney_p(first: int, second: int) -> float:
+    """The smallest two-sided p the exact Mann-Whitney test gives for samples of these sizes.
+
+    ``2 / C(n1 + n2, n1)``, at most 1: the p of two samples that do not overlap.
+
+    >>> smallest_mann_whitney_p(2, 2), round(smallest_mann_whitney_p(10, 10), 7)
+    (0.3333333333333333, 1.08e-05)
+    """
+    if first < 1 or second < 1:
+        return 1.0
+    return min(1.0, 2 / math.comb(first + second, first))
 
 
 def bootstrap_p_value(differences: ArrayLike) -> float | None:
@@ -99,6 +126,18 @@ class Comparison:
     """Undelivered carriers of the condition and of the baseline."""
     undelivered_differs: bool
     """Whether the two left different shares of their carriers undelivered."""
+    runs: tuple[int, int] = (0, 0)
+    """Runs of the condition and of the baseline."""
+
+    @property
+    def underpowered(self) -> bool:
+        """Fewer than ``MIN_RUNS`` runs on either side: read Mann-Whitney, not the bootstrap."""
+        return min(self.runs) < MIN_RUNS
+
+    @property
+    def smallest_p(self) -> float:
+        """The smallest p the exact Mann-Whitney test could give with these runs."""
+        return smallest_mann_whitney_p(*self.runs)
 
 
 def undelivered_differs(condition: ConditionKPIs, baseline: ConditionKPIs) -> bool:
@@ -141,6 +180,7 @@ def compare(
         bootstrap_distribution=differences,
         undelivered=(condition.kpis.undelivered, baseline.kpis.undelivered),
         undelivered_differs=undelivered_differs(condition.kpis, baseline.kpis),
+        runs=(condition.kpis.runs, baseline.kpis.runs),
     )
 
 

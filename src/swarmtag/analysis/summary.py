@@ -102,6 +102,8 @@ class MetricsReport:
                 "p_bootstrap": comparison.p_bootstrap,
                 "p_mannwhitney": comparison.p_mannwhitney,
                 "undelivered_differs": comparison.undelivered_differs,
+                "underpowered": comparison.underpowered,
+                "smallest_p_mannwhitney": comparison.smallest_p,
             }
             for comparison in self.comparisons
         ]

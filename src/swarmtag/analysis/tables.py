@@ -15,7 +15,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Final
 
-from swarmtag.analysis.compare import Comparison
+from swarmtag.analysis.compare import MIN_RUNS, Comparison
 from swarmtag.analysis.kpis import CENSORED_METRICS, CORE_METRICS, OPTIONAL_METRICS
 from swarmtag.analysis.summary import MetricsReport
 from swarmtag.errors import StatisticsError
@@ -24,6 +24,7 @@ __all__ = [
     "DELIVERED_LATENCY_METRICS",
     "FLAG",
     "SCALABILITY_METRICS",
+    "UNDERPOWERED",
     "censoring_notes",
     "flag_notes",
     "flagged",
@@ -41,6 +42,7 @@ __all__ = [
     "scalability_html",
     "scalability_notes",
     "scalability_table",
+    "underpowered_notes",
     "unit_word",
 ]
 
@@ -71,6 +73,8 @@ DELIVERED_LATENCY_METRICS: Final = ("p95_latency", "mean_latency")
 """The latency rows biased when undelivered shares differ: they get ``FLAG``."""
 FLAG: Final = "\N{DAGGER}"
 """Marks a delivered-only latency row whose two conditions left different shares undelivered."""
+UNDERPOWERED: Final = "\N{DOUBLE DAGGER}"
+"""Marks a bootstrap CI and p-value of an underpowered comparison (``Comparison.underpowered``)."""
 _COUNTS: Final = ("total_deliveries", "undelivered")
 
 
@@ -171,8 +175,10 @@ def _rows(report: MetricsReport) -> tuple[list[str], list[list[str]], list[str],
         [
             k.condition,
             metric_label(k.metric, report.time_unit) + (f" {FLAG}" if flagged(k) else ""),
-            format_interval(k.diff, k.confidence_interval.low, k.confidence_interval.high),
-            format_p_value(k.p_bootstrap, report.n_resamples),
+            format_interval(k.diff, k.confidence_interval.low, k.confidence_interval.high)
+            + (f" {UNDERPOWERED}" if k.underpowered else ""),
+            format_p_value(k.p_bootstrap, report.n_resamples)
+            + (f" {UNDERPOWERED}" if k.underpowered else ""),
             format_p_value(k.p_mannwhitney, report.n_resamples),
         ]
         for k in report.comparisons
@@ -227,6 +233,21 @@ def flag_notes(report: MetricsReport) -> list[str]:
     return notes
 
 
+def underpowered_notes(report: MetricsReport) -> list[str]:
+    """One line when any comparison is underpowered: the rule, and the test to read instead."""
+    weak = [k for k in report.comparisons if k.underpowered]
+    if not weak:
+        return []
+    fewest = min(min(k.runs) for k in weak)
+    floor = min(k.smallest_p for k in weak)
+    note = (
+        f"{UNDERPOWERED} underpowered: {fewest} run(s) per condition, fewer than {MIN_RUNS}. "
+        "The bootstrap over so few runs gives CIs too narrow and p-values that reach 0; "
+        f"read Mann-Whitney, whose smallest possible p here is {floor:.3g}."
+    )
+    return [note]
+
+
 def _note(report: MetricsReport) -> str:
     undelivered = ", ".join(f"{c.condition} {c.kpis.undelivered}" for c in report.conditions)
     return (
@@ -237,7 +258,12 @@ def _note(report: MetricsReport) -> str:
 
 
 def _notes(report: MetricsReport) -> list[str]:
-    return [_note(report), *censoring_notes(report), *flag_notes(report)]
+    return [
+        _note(report),
+        *censoring_notes(report),
+        *flag_notes(report),
+        *underpowered_notes(report),
+    ]
 
 
 def markdown_tables(report: MetricsReport) -> str:
@@ -257,6 +283,7 @@ _LATEX_SPECIAL: Final = {
     "#": r"\#",
     "<": r"$<$",
     FLAG: r"\textsuperscript{\dag}",
+    UNDERPOWERED: r"\textsuperscript{\ddag}",
 }
 
 

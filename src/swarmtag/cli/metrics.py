@@ -37,6 +37,7 @@ from swarmtag.analysis.choices import ConditionChoices, choice_statistics
 from swarmtag.analysis.html import Section, write_html
 from swarmtag.analysis.tables import (
     FLAG,
+    UNDERPOWERED,
     censoring_notes,
     flag_notes,
     flagged,
@@ -47,6 +48,7 @@ from swarmtag.analysis.tables import (
     markdown_tables,
     metric_cells,
     metric_label,
+    underpowered_notes,
     unit_word,
 )
 from swarmtag.analysis.window import window_note
@@ -102,12 +104,13 @@ def render_report(report: MetricsReport, console: Console) -> None:
             diffs.add_column(name, justify=justify)
         for comparison in report.comparisons:
             interval = comparison.confidence_interval
+            weak = f" {UNDERPOWERED}" if comparison.underpowered else ""
             diffs.add_row(
                 comparison.condition,
                 metric_label(comparison.metric, report.time_unit)
                 + (f" {FLAG}" if flagged(comparison) else ""),
-                format_interval(comparison.diff, interval.low, interval.high),
-                format_p_value(comparison.p_bootstrap, report.n_resamples),
+                format_interval(comparison.diff, interval.low, interval.high) + weak,
+                format_p_value(comparison.p_bootstrap, report.n_resamples) + weak,
                 format_p_value(comparison.p_mannwhitney, report.n_resamples),
             )
         console.print(diffs)
@@ -120,7 +123,7 @@ def render_report(report: MetricsReport, console: Console) -> None:
         f"undelivered: {undelivered}.",
         highlight=False,
     )
-    for note in (*censoring_notes(report), *flag_notes(report)):
+    for note in (*censoring_notes(report), *flag_notes(report), *underpowered_notes(report)):
         console.print(note, highlight=False)
     console.print(_time_note(report.time_unit), highlight=False)
     for statistics in report.conditions:
