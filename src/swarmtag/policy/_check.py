@@ -83,17 +83,15 @@ def _call(rule: ScoreRule, sample: dict[str, npt.NDArray[Any]]) -> npt.NDArray[n
 def check_rule(rule: ScoreRule) -> list[RuleCheck]:
     """Run every check on ``rule``; later checks are skipped (failed) once it cannot run."""
     sample = _sample()
-    checks: list[RuleCheck] = []
+    context = {key: sample[key] for key in ("marker", "age")}
     try:
-        first = _call(rule, sample)
+        first = rule.raw_scores(sample["urgency"], sample["distance"], context)
     except PolicyError as exc:
-        reason = str(exc)
-        failed = "returned a score of" in reason
-        checks.append(RuleCheck("runs", failed, "" if failed else reason))
-        if failed:
-            checks.append(RuleCheck("finite", False, reason))
-        return checks
-    checks.append(RuleCheck("runs", True, ""))
+        return [RuleCheck("runs", False, str(exc))]
+    checks = [RuleCheck("runs", True, "")]
+    problem = rule.non_finite(first)
+    if problem is not None:
+        return [*checks, RuleCheck("finite", False, problem)]
     checks.append(RuleCheck("finite", True, ""))
     checks.append(_deterministic(rule, sample, first))
     checks.append(_elementwise(rule, sample, first))

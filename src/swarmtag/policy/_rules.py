@@ -124,6 +124,26 @@ class ScoreRule(Policy):
         context: Mapping[str, npt.ArrayLike],
     ) -> npt.NDArray[np.float64]:
         """The function's scores, checked: one finite float per candidate."""
+        result = self.raw_scores(urgency, distance, context)
+        problem = self.non_finite(result)
+        if problem is not None:
+            raise PolicyError(problem)
+        return result
+
+    def non_finite(self, result: npt.NDArray[np.float64]) -> str | None:
+        """Why ``result`` cannot be scores (a NaN or infinite one), or None."""
+        if not result.size or np.isfinite(result).all():
+            return None
+        bad = float(result[~np.isfinite(result)][0])
+        return f"rule {self.label!r} ({self.source}) returned a score of {bad}; scores are finite"
+
+    def raw_scores(
+        self,
+        urgency: npt.NDArray[np.float64],
+        distance: npt.NDArray[np.float64],
+        context: Mapping[str, npt.ArrayLike],
+    ) -> npt.NDArray[np.float64]:
+        """The function's scores, one float per candidate, finite or not (``check_rule``)."""
         given = {}
         for key in self.wants:
             if key not in context:
@@ -146,12 +166,6 @@ class ScoreRule(Policy):
                     f"for {urgency.shape} candidates; return one score per candidate"
                 )
                 raise PolicyError(msg) from None
-        if result.size and not np.isfinite(result).all():
-            bad = float(result[~np.isfinite(result)][0])
-            msg = (
-                f"rule {self.label!r} ({self.source}) returned a score of {bad}; scores are finite"
-            )
-            raise PolicyError(msg)
         return result
 
 

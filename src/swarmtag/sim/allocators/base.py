@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -14,7 +16,7 @@ from swarmtag.sim.model.state import Int, WorldState
 __all__ = ["AllocatorChooser"]
 
 
-class AllocatorChooser:
+class AllocatorChooser(ABC):
     """An allocator's choice step (``decide.Chooser``) with hooks before and after ``decide``.
 
     Subclasses implement ``__call__``; ``prepare`` (before the built-in
@@ -24,9 +26,9 @@ class AllocatorChooser:
 
     global_knowledge = False
 
+    @abstractmethod
     def __call__(self, selection: Selection) -> tuple[Int, NDArray[np.float64]]:
         """Each robot's choice (R, N), -1 none, and its candidate count."""
-        raise NotImplementedError
 
     def prepare(
         self,
