@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
+import time
 
 import pytest
 
 from swarmtag.calibration import EvaluationCache, Evaluator, KpiTarget, calibrate
-from swarmtag.calibration.cache import CacheEntry
+from swarmtag.calibration.cache import CacheEntry, parse_line
 from swarmtag.errors import CalibrationError
 from tests.calibration.helpers import tiny_problem, tiny_setup, tiny_targets
 
@@ -105,3 +107,116 @@ def test_an_interrupted_calibration_keeps_its_points_and_resumes(tmp_path):
     (free,) = problem.free
     resumed = [{free.key: free.from_unit(step.unit[0])} for step in result.search.steps[:2]]
     assert [evaluation.values for evaluation in seen] == resumed
+
+
+# --- a corrupted cache is never used (issue 35) --------------------------------------------
+
+
+def _set_latency(value):
+    def change(record):
+        record["achieved"]["tiny"]["p95_latency"] = value
+
+    return change
+
+
+def _rename(table, old, new):
+    def change(record):
+        where = record if table is None else record[table]
+        where[new] = where.pop(old)
+
+    return change
+
+
+def _double_latency(record):
+    record["achieved"]["tiny"]["p95_latency"] *= 2
+
+
+def _drop_check(record):
+    del record["check"]
+
+
+DEEP = "[" * 2000 + "1" + "]" * 2000
+CORRUPTIONS = {
+    "NaN": (_set_latency(math.nan), None),
+    "Infinity": (_set_latency(math.inf), None),
+    "-Infinity": (_set_latency(-math.inf), None),
+    "null": (_set_latency(None), None),
+    "400-digit integer": (_set_latency(int("9" * 400)), None),
+    "400-digit float": (_set_latency(0.5), ("0.5", "0." + "5" * 400)),
+    "-1e308": (_set_latency(-1e308), None),
+    "deep nesting": (_set_latency("deep"), ('"deep"', DEEP)),
+    "renamed key": (_rename(None, "achieved", "achieve"), None),
+    "renamed KPI": (_rename("achieved", "tiny", "other"), None),
+    "edited number": (_double_latency, None),
+    "line without a check": (_drop_check, None),
+    "key given twice": (lambda record: None, ('{"achieved"', '{"objective": 0, "achieved"')),
+    "not an object": (lambda record: record.clear(), ("{}", "[1, 2]")),
+}
+"""What a corrupted line holds: a change to its record, then one to its text."""
+
+
+@pytest.mark.parametrize("corruption", CORRUPTIONS)
+def test_a_corrupted_line_is_simulated_again_and_the_fit_is_unchanged(
+    first_run, tmp_path, corruption
+):
+    path, _, clean = first_run
+    lines = path.read_text().splitlines()[:3]  # its own points (other tests append theirs)
+    change, (old, new) = CORRUPTIONS[corruption][0], CORRUPTIONS[corruption][1] or ("", "")
+    record = json.loads(lines[1])
+    change(record)
+    lines[1] = json.dumps(record, sort_keys=True).replace(old, new, 1)
+    corrupted = tmp_path / "c.jsonl"
+    corrupted.write_text("\n".join(lines) + "\n")
+    cache = EvaluationCache(corrupted)
+    evaluator, evaluations = evaluate(tiny_problem(), cache)
+    assert [e.objective for e in evaluations] == [e.objective for e in clean]
+    assert [e.achieved for e in evaluations] == [e.achieved for e in clean]
+    assert (evaluator.computed, evaluator.reused) == (1, 2)
+    assert [number for number, _ in cache.skipped_lines] == [2]
+    assert cache.skipped_note().startswith(f"1 line of {corrupted} could not be used (line 2; ")
+
+
+@pytest.mark.parametrize(
+    ("line", "why"),
+    [
+        ('{"a": NaN}', "NaN is not a number JSON allows"),
+        ('{"a": ' + "9" * 400 + "}", "an integer of 400 digits"),
+        (DEEP, "nested more than 4 levels deep"),
+        ('{"a": 1, "a": 2}', "a key given twice"),
+        ("[1, 2]", "the line: not an object"),
+        ('{"key": "k"}', "keys achieved, check, objective, values missing"),
+    ],
+)
+def test_each_bad_line_says_why(line, why):
+    with pytest.raises(CalibrationError) as refused:
+        parse_line(line)
+    assert str(refused.value) == why
+
+
+def test_a_hostile_line_is_refused_in_linear_time():
+    started = time.perf_counter()
+    for line in ('"' + '\\"' * 200_000, "[" * 500_000, '"' * 400_000):
+        with pytest.raises(CalibrationError):
+            parse_line(line)
+    assert time.perf_counter() - started < 5
+
+
+def test_the_note_names_every_skipped_line_in_one_line(tmp_path, monkeypatch):
+    path = tmp_path / "c.jsonl"
+    cache = EvaluationCache(path)
+    for index in range(3):
+        entry = CacheEntry(values={"x": float(index)}, achieved={"a": {"pa": 0.5}})
+        cache.put(f"k{index}", entry, objective=1.0)
+    lines = path.read_text().splitlines()
+    monkeypatch.setattr("swarmtag.calibration.cache.MAX_LINE_BYTES", 500)
+    long = '{"key": "' + "x" * 2000 + '"}'
+    path.write_text("\n".join([lines[0], "oops", "NaN", lines[1], long, lines[2], "{"]) + "\n")
+    reopened = EvaluationCache(path)
+    assert (len(reopened), reopened.skipped) == (3, 4)
+    note = reopened.skipped_note()
+    assert note == (
+        f"4 lines of {path} could not be used (lines 2-3, 5, 7; line 2: not JSON "
+        "(Expecting value: line 1 column 1 (char 0))); a point found in no other line is "
+        "simulated again"
+    )
+    assert "\n" not in note

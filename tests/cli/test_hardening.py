@@ -241,3 +241,111 @@ def test_names_too_long_for_a_path_are_one_line(tmp_path, capsys, monkeypatch, a
     monkeypatch.chdir(tmp_path)
     err = refused(capsys, tmp_path, *argv)
     assert "xxx" in err
+
+
+# --- TOML inputs: bounded size and nesting on every surface (issue 35) ---------------------
+
+DEEP_TOML = {
+    "arrays": "a = " + "[" * 400 + "]" * 400 + "\n",
+    "inline-tables": "a = " + "{b = " * 400 + "1" + "}" * 400 + "\n",
+    "dotted-header": "[[" + ".".join(["a"] * 400) + "]]\nx = 1\n",
+}
+"""About a kilobyte each: the first two raised RecursionError (a traceback, exit 1)."""
+TOML_SURFACES = {
+    "simulate --profile": (None, "simulate --profile {f} --ticks 10 --runs 1"),
+    "simulate --config": (None, "simulate --config {f} --ticks 10 --runs 1"),
+    "simulate --set": (None, "simulate --ticks 10 --runs 1 --set k={v}"),
+    "study run": (None, "study run {f} --out out --workers 1"),
+    "study report": (None, "study report rep --study {f}"),
+    "reproduce --study": (None, "reproduce --study {f} --out out --workers 1"),
+    "calibrate --baseline": (None, "calibrate --baseline {f} --free tick=0.02:0.2 --out p.toml"),
+    "calibrate --profile": (None, "calibrate --baseline lab --profile {f} --out p.toml"),
+    "calibrate --set": (None, "calibrate --baseline lab --out p.toml --set k={v}"),
+    "profiles FILE": (None, "profiles {f}"),
+    "log import --mapping": ("rosbags", "log import trial.mcap --mapping {f} --events e.csv"),
+    "aruco render --camera": (
+        "cv2",
+        "aruco render --camera {f} --marker 1 --distance 0.5 --bearing 0 --out i.png",
+    ),
+    "aruco detect --camera": ("cv2", "aruco detect image.png --camera {f}"),
+}
+"""Every command-line option that reads TOML: the extra it needs, and its argv."""
+
+
+def toml_argv(tmp_path: Path, surface: str, text: str) -> list[str]:
+    """``surface``'s argv with ``text`` as its TOML file (or ``--set`` value), in ``tmp_path``."""
+    extra, argv = TOML_SURFACES[surface]
+    if extra is not None:
+        pytest.importorskip(extra)
+    path = tmp_path / "input.toml"
+    path.write_text(text)
+    (tmp_path / "trial.mcap").write_bytes(b"")
+    (tmp_path / "image.png").write_bytes(b"")
+    value = text.partition(" = ")[2].strip()  # the value of 'a = ...' for --set
+    return [arg.replace("{f}", str(path)).replace("{v}", value) for arg in argv.split()]
+
+
+@pytest.mark.parametrize(
+    ("surface", "form"),
+    [
+        (surface, form)
+        for surface in TOML_SURFACES
+        for form in DEEP_TOML
+        if not (surface.endswith("--set") and form == "dotted-header")  # --set takes a value
+    ],
+)
+def test_deeply_nested_toml_is_one_line_on_every_surface(
+    tmp_path, capsys, monkeypatch, surface, form
+):
+    monkeypatch.chdir(tmp_path)
+    argv = toml_argv(tmp_path, surface, DEEP_TOML[form])
+    err = refused(capsys, tmp_path, *argv)
+    assert "nested more than 32 levels deep" in err
+
+
+@pytest.mark.parametrize("surface", [s for s in TOML_SURFACES if not s.endswith("--set")])
+def test_an_oversize_toml_file_is_one_line_on_every_surface(tmp_path, capsys, monkeypatch, surface):
+    monkeypatch.chdir(tmp_path)
+    argv = toml_argv(tmp_path, surface, "# " + "x" * (1 << 20) + "\nname = 'big'\n")
+    err = refused(capsys, tmp_path, *argv)
+    assert "larger than 1024 KiB" in err
+
+
+def test_a_set_key_of_two_thousand_parts_is_one_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    key = ".".join(["a"] * 2000)
+    err = refused(capsys, tmp_path, "simulate", *SMALL, "--set", f"{key}=1")
+    assert "has 2000 dotted parts; at most 32" in err
+
+
+# --- studies checked before any work (issue 35) -------------------------------------------
+
+
+def test_a_warmup_past_the_run_end_is_refused_before_any_run(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    study = tmp_path / "w.toml"  # the defaults: a 60 s warm-up is tick 3103 of 3000
+    study.write_text(
+        'name = "w"\nconditions = ["proximity"]\nruns = 2\n[scales.s]\nwarehouse = {}\n'
+    )
+    started = time.perf_counter()
+    err = refused(capsys, tmp_path, "study", "run", str(study), "--out", "out", "--workers", "1")
+    assert (
+        "scales.s: warehouse.warmup: 60 s is tick 3103, not before the run's end at tick 3000"
+        in err
+    )
+    assert time.perf_counter() - started < 3  # nothing simulated
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_study_name_too_long_for_a_folder_is_refused_before_writing(
+    tmp_path, capsys, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    study = tmp_path / "s.toml"
+    study.write_text(f'name = "{"x" * 300}"\nconditions = ["proximity"]\nruns = 1\nticks = 50\n')
+    err = refused(capsys, tmp_path, "study", "run", str(study), "--out", "out", "--workers", "1")
+    assert (
+        "name: 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx'... is 300 characters long; at most 100"
+        in err
+    )
+    assert not (tmp_path / "out").exists()

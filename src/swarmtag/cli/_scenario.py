@@ -8,13 +8,13 @@ Layers, later ones winning: the profile (``--profile``, default
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Final, TypeVar
 
 import click
 
+from swarmtag._toml import MAX_TOML_DEPTH, toml_value
 from swarmtag.errors import ConfigError
 from swarmtag.sim import Scenario
 from swarmtag.sim.backends import BACKENDS
@@ -83,10 +83,12 @@ def parse_set(text: str) -> tuple[str, Any]:
     if not equals or not key:
         msg = f"--set: {text!r} is not KEY=VALUE (e.g. camera.memory=20)"
         raise ConfigError(msg)
-    try:
-        value: Any = tomllib.loads(f"v = {raw.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
-        value = raw.strip()
+    parts = key.count(".") + 1
+    shown = key if len(key) <= 40 else f"{key[:40]}..."
+    if parts > MAX_TOML_DEPTH:  # a deeper key would nest the merged scenario as deep
+        msg = f"--set: key {shown!r} has {parts} dotted parts; at most {MAX_TOML_DEPTH}"
+        raise ConfigError(msg)
+    value: Any = toml_value(raw, source=f"--set {shown}", error=ConfigError)
     return key, value
 
 

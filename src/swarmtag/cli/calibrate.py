@@ -299,6 +299,6 @@ def calibrate_cmd(
     for note in targets.notes:
         console.print(f"note: {note}")
     if cache.skipped:
-        console.print(f"note: {cache.skipped} unreadable line(s) of {cache_file} were skipped")
+        console.print(f"note: {cache.skipped_note()}")
     for line in written:
         console.print(f"wrote {line}")

@@ -61,7 +61,7 @@ from swarmtag.sim.backends import BACKENDS
 from swarmtag.sim.config.parts import MAX_TICKS
 from swarmtag.sim.config.profiles import DEFAULT_PROFILE, Profile, load_profile
 
-__all__ = ["DEFAULT_SCALE", "URGENCY_MODELS", "Scale", "Study", "read_study_file"]
+__all__ = ["DEFAULT_SCALE", "MAX_NAME", "URGENCY_MODELS", "Scale", "Study", "read_study_file"]
 
 DEFAULT_SCALE: Final = "default"
 """Key of the single scale of a study file without a ``[scales]`` table."""
@@ -88,6 +88,8 @@ _KEYS: Final = (
     "scales",
 )
 _SAFE_NAME: Final = re.compile(r"[A-Za-z0-9._-]+")
+MAX_NAME: Final = 100
+"""Longest study name or scale key: each names a folder (most file systems allow 255 bytes)."""
 _DEFAULT_TICKS: Final = 3000
 _DEFAULT_QUICK: Final = 10
 MAX_CHUNK_RUNS: Final = 10_000
@@ -108,8 +110,14 @@ def _text(value: object, key: str) -> str:
 
 
 def _folder_name(value: object, key: str) -> str:
-    """A name used as a folder of the results: letters, digits, ``.``, ``_`` and ``-`` only."""
+    """A folder name of the results: ``MAX_NAME`` letters, digits, ``.``, ``_`` or ``-`` at most."""
     text = _text(value, key)
+    if len(text) > MAX_NAME:
+        msg = (
+            f"{key}: {text[:40]!r}... is {len(text)} characters long; "
+            f"at most {MAX_NAME} (it names a folder)"
+        )
+        raise StudyError(msg)
     if not _SAFE_NAME.fullmatch(text) or text in {".", ".."}:
         msg = f"{key}: {text!r} may hold only letters, digits, '.', '_' and '-' (it names a folder)"
         raise StudyError(msg)
@@ -164,6 +172,19 @@ class Scale:
 
     key: str
     scenario: Scenario
+
+    def __post_init__(self) -> None:
+        """Refuse a warm-up at or past the run's end now, not after every run (``kpi_log``)."""
+        warehouse, end = self.scenario.warehouse, self.scenario.run_ticks
+        if warehouse is None or (first := self.kpi_warmup("tick")) < end:
+            return
+        where = "scenario" if self.key == DEFAULT_SCALE else f"scales.{self.key}"
+        msg = (
+            f"{where}: warehouse.warmup: {warehouse.warmup:g} s is tick {first:g}, "
+            f"not before the run's end at tick {end} ({end * self.scenario.tick:g} s); "
+            "shorten the warm-up or lengthen the run (ticks)"
+        )
+        raise StudyError(msg)
 
     @property
     def code_version(self) -> str:

@@ -23,13 +23,12 @@ import enum
 import math
 import os
 import re
-import tomllib
 from dataclasses import dataclass
 from importlib.resources import files
 from importlib.resources.abc import Traversable
 from typing import Any, Final, NoReturn
 
-from swarmtag._toml import read_toml
+from swarmtag._toml import loads_toml, read_toml
 from swarmtag.errors import BagError
 
 __all__ = [
@@ -404,7 +403,9 @@ class BagMapping:
     def default(cls) -> BagMapping:
         """The shipped mapping of the ``swarmtag_msgs`` layout."""
         text = default_mapping().read_text(encoding="utf-8")
-        return cls.from_mapping(tomllib.loads(text), source=DEFAULT_MAPPING)
+        return cls.from_mapping(
+            loads_toml(text, source=DEFAULT_MAPPING, error=BagError), source=DEFAULT_MAPPING
+        )
 
 
 def default_mapping() -> Traversable:
