@@ -7,10 +7,13 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: demo test lint typecheck unit clean generate
 
+# The install takes about 80 s the first time: pip says what it collects, downloads and
+# installs (no --quiet, so that the wait is visible; its progress bars show on a terminal).
+# Upgrading pip itself takes seconds and stays quiet.
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install -e '.[dev]'
 	touch $(STAMP)
 
 DEMO_OUT ?= out/demo

@@ -40,6 +40,19 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    """No inherited terminal width; then have the fast kernel's machine code cached.
+
+    pytest-xdist exports ``COLUMNS=80`` to its workers, and the command line
+    honours an exported ``COLUMNS`` even in a pipe: without this the
+    console's width would depend on how the suite is run. Tests that want
+    a width set it themselves.
+    """
+    os.environ.pop("COLUMNS", None)
+    os.environ.pop("LINES", None)
+    _compile_kernel(config)
+
+
+def _compile_kernel(config: pytest.Config) -> None:
     """Have the fast kernel's machine code cached before the tests (or their workers) start.
 
     Its first compilation takes minutes on one core. Done here, the two

@@ -23,6 +23,7 @@ PACKAGES = [
     "swarmtag.experiments",
     "swarmtag.calibration",
     "swarmtag.perception",
+    "swarmtag.notebook",
 ]
 
 
@@ -62,6 +63,7 @@ ENTRY_POINTS = {
     "load_profile": "swarmtag.sim",
     "parse_policy": "swarmtag.policy",
     "read_event_log": "swarmtag.io",
+    "simulate": "swarmtag.notebook",
     "summarize": "swarmtag.analysis",
 }
 """What ``import swarmtag`` offers (on first use), by home module."""
@@ -69,7 +71,10 @@ ENTRY_POINTS = {
 
 def test_import_swarmtag_stays_light():
     # a fresh interpreter (this one has numpy already): the entry points wait until asked for
-    script = "import sys, swarmtag; print(sorted({'numpy', 'swarmtag.sim'} & set(sys.modules)))"
+    script = (
+        "import sys, swarmtag; "
+        "print(sorted({'numpy', 'pandas', 'swarmtag.sim', 'swarmtag.notebook'} & set(sys.modules)))"
+    )
     done = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=60
     )
@@ -91,5 +96,3 @@ def test_the_top_level_offers_the_entry_points_and_the_version_only():
     assert set(swarmtag.__all__) == {*ENTRY_POINTS, "__version__"}
     with pytest.raises(AttributeError, match="has no attribute 'nope'"):
         _ = swarmtag.nope
-    with pytest.raises(AttributeError, match="has no attribute 'simulate'"):
-        _ = swarmtag.simulate  # reserved for the notebook API of SPEC §8.5

@@ -8,21 +8,24 @@ the tag protocol (``swarmtag.tag``), the selection policies
 (``swarmtag.analysis``).
 
 The main entry points are offered here too, imported on first use so that
-``import swarmtag`` stays cheap (no numpy)::
+``import swarmtag`` stays cheap (no numpy, no pandas)::
 
     import swarmtag
 
+    result = swarmtag.simulate(conditions=["proximity", "urgency:alpha=0.7"], runs=10, seed=3)
+    result.kpis(), result.compare()      # pandas DataFrames (the pandas extra)
     log = swarmtag.read_event_log("trial.csv")
     report = swarmtag.summarize(log)
     scenario = swarmtag.Scenario.default(5, 10)
     policy = swarmtag.parse_policy("urgency:alpha=0.7")
 
+``simulate`` is the notebook API of SPEC §8.5 (``swarmtag.notebook``:
+several conditions in one call, results as DataFrames; docs/notebook.md).
 ``Scenario``, ``load_profile`` and ``BUILTIN`` are ``swarmtag.sim``'s,
 ``parse_policy`` is ``swarmtag.policy``'s, ``read_event_log``
-``swarmtag.io``'s and ``summarize`` ``swarmtag.analysis``'s. Simulating is
-``swarmtag.sim.simulate(scenario, policy, ...)``; the name
-``swarmtag.simulate`` is kept for the notebook API of SPEC §8.5 (several
-conditions in one call, results as DataFrames), whose signature differs.
+``swarmtag.io``'s and ``summarize`` ``swarmtag.analysis``'s. The
+simulator's own entry point, one condition at a time with its event logs as
+arrays, is ``swarmtag.sim.simulate(scenario, policy, ...)``.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ TYPE_CHECKING = False  # not typing's: importing typing would delay the CLI's SI
 if TYPE_CHECKING:
     from swarmtag.analysis import summarize
     from swarmtag.io import read_event_log
+    from swarmtag.notebook import simulate
     from swarmtag.policy import parse_policy
     from swarmtag.sim import BUILTIN, Scenario, load_profile
 
@@ -41,6 +45,7 @@ __all__ = [
     "load_profile",
     "parse_policy",
     "read_event_log",
+    "simulate",
     "summarize",
 ]
 
@@ -53,6 +58,7 @@ _LAZY = {
     "load_profile": "swarmtag.sim",
     "parse_policy": "swarmtag.policy",
     "read_event_log": "swarmtag.io",
+    "simulate": "swarmtag.notebook",
     "summarize": "swarmtag.analysis",
 }
 """The entry points offered here, by the module that defines them (imported on first use)."""

@@ -61,3 +61,58 @@ def test_a_figure_of_panels_side_by_side_gets_the_page_width(tmp_path):
     doc = render_html("r", [Section("s", figures=[wide, square])], facts={})
     figures = re.findall(r"<figure[^>]*>", doc)
     assert figures == ['<figure class="wide">', "<figure>"]
+
+
+def test_a_folded_section_holds_its_parts_one_level_down():
+    inner = Section("swarm 5x10", tables_html=["<table><tr><td>1</td></tr></table>"])
+    doc = render_html(
+        "r",
+        [Section("scalability", summary="3 runs per condition", facts={"a": "b"}, parts=[inner])],
+        facts={},
+    )
+    folded = doc[doc.index("<details>") : doc.index("</details>")]
+    assert folded.startswith(
+        '<details>\n<summary><h2>scalability</h2><span class="runs">3 runs per condition</span>'
+        "</summary>\n<dl>"
+    )
+    assert "<h3>swarm 5x10</h3>" in folded
+    # every table scrolls in its own box, so a wide one does not widen the page
+    assert '<div class="scroll"><table><tr><td>1</td></tr></table></div>' in folded
+    unfolded = render_html("r", [Section("plain")], facts={})
+    assert "<details>" not in unfolded
+    assert "<h2>plain</h2>" in unfolded
+
+
+def test_the_page_reads_at_phone_width_and_a_banner_leads():
+    doc = render_html("r", [Section("s")], facts={"x": "y"}, banner="Quick run: run `a & b`.")
+    assert '<meta name="viewport" content="width=device-width, initial-scale=1">' in doc
+    assert "@media (max-width: 40em)" in doc
+    assert "max-width: 72em" in doc
+    banner = '<p class="banner">Quick run: run <code>a &amp; b</code>.</p>'
+    assert doc.index("<h1>r</h1>") < doc.index(banner) < doc.index("<dl>")
+    assert 'class="banner"' not in render_html("r", [Section("s")], facts={})
+
+
+def test_a_figure_shows_the_caption_its_png_carries(tmp_path):
+    from PIL import Image
+    from PIL.PngImagePlugin import PngInfo
+
+    from swarmtag.analysis.html import CAPTION_KEY, png_text
+
+    latin, greek = PngInfo(), PngInfo()
+    latin.add_text(CAPTION_KEY, "PA against p < 50.")
+    greek.add_text(CAPTION_KEY, "PA at \N{GREEK SMALL LETTER ALPHA} 0.7.")  # iTXt: not latin-1
+    plain = tmp_path / "pa_curves.png"
+    Image.new("RGB", (40, 30), "white").save(plain)
+    for name, info in (("latin.png", latin), ("greek.png", greek)):
+        Image.new("RGB", (40, 30), "white").save(tmp_path / name, pnginfo=info)
+    assert png_text((tmp_path / "greek.png").read_bytes(), CAPTION_KEY) == (
+        "PA at \N{GREEK SMALL LETTER ALPHA} 0.7."
+    )
+    assert png_text(plain.read_bytes(), CAPTION_KEY) is None
+    figures = [tmp_path / "latin.png", tmp_path / "greek.png", plain]
+    doc = render_html("r", [Section("s", figures=figures)], facts={})
+    captions = re.findall(r"<figcaption>([^<]*)</figcaption>", doc)
+    assert captions == ["PA against p &lt; 50.", "PA at \N{GREEK SMALL LETTER ALPHA} 0.7.",
+                        "pa curves"]  # fmt: skip
+    assert re.findall(r'alt="([^"]*)"', doc) == ["latin", "greek", "pa curves"]

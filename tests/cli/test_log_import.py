@@ -176,3 +176,67 @@ def test_simulate_mcap_writes_one_file_per_condition_for_the_drawn_run(tmp_path,
         back = read_event_log(tmp_path / f"{slug}.csv")
         assert back == log.take((log.condition == condition) & (log.run == 1))
     assert not mcap.exists()
+
+
+def test_log_import_of_the_name_given_to_simulate_reads_every_condition_s_file(tmp_path, capsys):
+    """``simulate --mcap run.mcap`` of two conditions, then ``log import run.mcap`` (README)."""
+    events, table, mcap = tmp_path / "sim.csv", tmp_path / "sim-table.csv", tmp_path / "run.mcap"
+    code, _, err = run(
+        capsys, "simulate", *SMALL, "--runs", "1", "--run-offset", "2", "--events", str(events),
+        "--event-table", str(table), "--mcap", str(mcap),
+    )  # fmt: skip  # the default conditions: proximity and urgency:alpha=0.7
+    assert (code, err) == (0, "")
+    files = [tmp_path / "run-proximity.mcap", tmp_path / "run-urgency-alpha-0.7.mcap"]
+    assert sorted(tmp_path.glob("*.mcap")) == files
+    back, back_table = tmp_path / "back.csv", tmp_path / "back-table.csv"
+    code, out, err = run(
+        capsys, "log", "import", str(mcap), "--events", str(back), "--event-table", str(back_table)
+    )
+    assert (code, err) == (0, "")
+    lines = out.splitlines()
+    assert lines[0] == (
+        f"{mcap}: no such file; read the 2 files run-*.mcap beside it "
+        "(one per condition, as simulate --mcap writes them) into one event log:"
+    )
+    assert lines[1].startswith(f"{files[0]}: 1 trial(s), 7 carrier rows (")
+    assert lines[1].endswith("times in ticks, conditions proximity")
+    assert lines[2].endswith("conditions urgency:alpha=0.7")
+    assert lines[3:] == [
+        f"wrote event log: {back}",
+        f"wrote event table ({len(read_event_table(table))} rows): {back_table}",
+    ]
+    assert back.read_bytes() == events.read_bytes()
+    assert back_table.read_bytes() == table.read_bytes()
+    # a name with glob characters is matched as written, and an existing file wins
+    for source in files:
+        (tmp_path / source.name.replace("run-", "a[1]-")).write_bytes(source.read_bytes())
+    only = tmp_path / "only.csv"
+    code, out, _ = run(capsys, "log", "import", str(tmp_path / "a[1].mcap"), "--events", str(only))
+    assert code == 0
+    assert "read the 2 files a[1]-*.mcap" in out
+    assert read_event_log(only) == read_event_log(events)
+    code, out, _ = run(capsys, "log", "import", str(files[0]), "--events", str(only))
+    assert code == 0
+    assert "no such file" not in out
+    assert read_event_log(only).conditions == ("proximity",)
+
+
+def test_log_import_of_clashing_condition_files_is_one_line_naming_them(tmp_path, capsys):
+    code, _, err = run(
+        capsys, "simulate", *SMALL, "--runs", "1", "--condition", "proximity",
+        "--mcap", str(tmp_path / "run-a.mcap"),
+    )  # fmt: skip
+    assert (code, err) == (0, "")
+    (tmp_path / "run-b.mcap").write_bytes((tmp_path / "run-a.mcap").read_bytes())
+    events = tmp_path / "e.csv"
+    code, out, err = run(
+        capsys, "log", "import", str(tmp_path / "run.mcap"), "--events", str(events)
+    )
+    assert (code, out) == (2, "")
+    assert err.startswith(
+        f"swarmtag: error: {tmp_path / 'run-a.mcap'}, {tmp_path / 'run-b.mcap'}: cannot be "
+        "imported as one event log (run 0 of proximity has two rows for carrier "
+    )
+    assert err.endswith("; import each on its own\n")
+    assert err.count("\n") == 1
+    assert not events.exists()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -264,3 +265,171 @@ def test_few_runs_mark_every_bootstrap_ci_and_p_underpowered(capsys, runs, weak)
     assert ("\N{DOUBLE DAGGER}" in out) is weak
     if weak:
         assert "smallest possible p here is 0.1" in out
+
+
+THREE = ("--condition", "proximity", "--condition", "urgency:alpha=0.7",
+         "--condition", "urgency:alpha=9")  # fmt: skip
+NAMES = ("proximity", "urgency:alpha=0.7", "urgency:alpha=9.0")
+PAPER = ("--runs", "12", "--resamples", "300", "--no-progress")
+"""The paper-sim world (urgency matters there), enough runs not to be underpowered."""
+TITLES = ("Metrics by condition", "Differences from the baseline", "Choice statistics by")
+
+
+def _tables(out: str) -> list[tuple[list[str], list[str]]]:
+    """Each table of the output: the legend lines just above its title, and its lines."""
+    lines = out.splitlines()
+    found = []
+    for index, line in enumerate(lines):
+        if line.startswith(TITLES):
+            legend = []
+            above = index - 1
+            while above >= 0 and (lines[above].startswith(("Conditions: ", "    "))):
+                legend.insert(0, lines[above])
+                above -= 1
+            end = next(
+                (i for i in range(index + 1, len(lines)) if not lines[i].strip()
+                 or lines[i].startswith((*TITLES, "Conditions: ", "Left out", "Latency", "PA at",
+                                         "Shares", "Times"))),
+                len(lines),
+            )  # fmt: skip
+            found.append((legend, lines[index:end]))
+    return found
+
+
+@pytest.mark.parametrize("width", [80, 120])
+def test_default_output_tells_every_condition_apart_at_the_width(capsys, monkeypatch, width):
+    monkeypatch.setenv("COLUMNS", str(width))
+    code, out, _ = run(capsys, *PAPER, *THREE)
+    assert code == 0
+    lines = out.splitlines()
+    assert max(len(line) for line in lines) <= width
+    assert "\N{HORIZONTAL ELLIPSIS}" not in out  # rich cuts what does not fit with an ellipsis
+    for line in lines:  # every interval on one line: "0.41 [0.38, 0.44]" is never wrapped
+        assert line.count("[") == line.count("]"), line
+    tables = _tables(out)
+    assert [table[1][0].split(" (")[0].split(":")[0] for table in tables] == [
+        "Metrics by condition", "Differences from the baseline proximity",
+        "Choice statistics by condition", "Choice statistics by condition",
+    ][: len(tables)]  # fmt: skip
+    assert len(tables) >= 3
+    for legend, table in tables:
+        text = "\n".join(table)
+        shown = [name for name in NAMES if name in text]
+        if len(shown) < len(NAMES) - (1 if table[0].startswith("Differences") else 0):
+            # short labels: the legend names every condition, the table heads its columns by label
+            entries = dict(part.strip().split(" = ") for part in " ".join(legend)[12:].split(";"))
+            assert sorted(entries.values()) == sorted(
+                n for n in NAMES if not (table[0].startswith("Differences") and n == "proximity")
+            )
+            assert all(label in table[1] for label in entries)
+
+
+def test_narrow_tables_go_long_and_wide_ones_stay_side_by_side(capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "80")
+    code, out, _ = run(capsys, *PAPER, *THREE)
+    assert code == 0
+    # three intervals side by side do not fit 80 columns: one row per metric and condition
+    assert re.search(r"^Metric +Condition +Value$", out, re.MULTILINE)
+    assert re.search(r"^PA \(5-50 %\) +proximity +\S", out, re.MULTILINE)
+    assert re.search(r"^ +urgency:alpha=9\.0 +0\.\d{4} \[", out, re.MULTILINE)
+    monkeypatch.setenv("COLUMNS", "200")
+    code, out, _ = run(capsys, *PAPER, *THREE)
+    header = next(line for line in out.splitlines() if line.startswith("Metric "))
+    assert header.split() == ["Metric", *NAMES]
+
+
+def test_headlines_come_first_and_hold_the_comparisons(capsys, monkeypatch):
+    from swarmtag.analysis.headline import signed
+    from swarmtag.analysis.tables import format_number
+
+    monkeypatch.setenv("COLUMNS", "80")
+    code, out, _ = run(capsys, *PAPER, *THREE, "--json")
+    document = json.loads(out)
+    code, out, _ = run(capsys, *PAPER, *THREE)
+    assert code == 0
+    lines = out.splitlines()
+    first = lines.index("") + 1  # after the scenario sentence
+    values = {c["condition"]: c for c in document["conditions"]}
+    for name in NAMES[1:]:
+        found = {c["metric"]: c for c in document["comparisons"] if c["condition"] == name}
+        pa, p95, throughput = found["pa"], found["p95_latency"], found["throughput"]
+        start = next(i for i, line in enumerate(lines) if line.startswith(f"{name} vs proximity: "))
+        assert start < lines.index(next(x for x in lines if x.startswith("Metrics by condition")))
+        assert start >= first
+        text = " ".join(line.strip() for line in lines[start : start + 3])
+        low, high = (format_number(x) for x in pa["ci"])
+        assert f"PA {signed(pa['diff'])} [{low}, {high}] p" in text
+        assert pa["p_bootstrap"] < 0.05  # urgency-aware selection aligns with priorities
+        low, high = (format_number(x) for x in p95["ci"])
+        assert f"P95 {signed(p95['diff'])} [{low}, {high}] ticks p" in text
+        change = 100 * throughput["diff"] / values["proximity"]["throughput"]["value"]
+        p = throughput["p_bootstrap"]
+        assert f"throughput {change:+.1f} % p={p:.3g}" in text
+        assert "\N{DOUBLE DAGGER}" not in text  # 12 runs each
+
+
+def test_rows_that_repeat_others_are_left_out_with_a_note(capsys):
+    code, out, _ = run(capsys, *PAPER, *THREE, "--json")
+    document = json.loads(out)
+    assert {c["undelivered"] for c in document["conditions"]} == {0}
+    deliveries = [c for c in document["comparisons"] if c["metric"] == "deliveries_per_run"]
+    assert {(c["diff"], *c["ci"]) for c in deliveries} == {(0, 0, 0)}
+    code, out, _ = run(capsys, *PAPER, *THREE)
+    assert code == 0
+    text = " ".join(out.split())  # the note is one line, wrapped at the console's width
+    assert "Left out: the censored latencies, KM P95 and the undelivered counts" in text
+    assert (
+        "Left out as 0 [0, 0] for every condition: the differences in Deliveries per run." in text
+    )
+    rows = [line.strip() for line in out.splitlines()]
+    for label in ("P95 latency, censored", "Mean latency, censored", "KM P95 latency",
+                  "Undelivered carriers"):  # fmt: skip
+        assert not any(row.startswith(label) for row in rows), label
+    assert sum(row.startswith("Deliveries per run") for row in rows) == 1  # values, no difference
+    assert json.loads(run(capsys, *PAPER, *THREE, "--json")[1]) == document  # JSON keeps all
+
+
+def test_tables_are_printed_before_the_pictures_are_drawn(capsys, monkeypatch, tmp_path):
+    from swarmtag.sim.outputs import render
+
+    seen = []
+    real = render.snapshot
+
+    def snapshot(*args, **kwargs):
+        seen.append(capsys.readouterr().out)  # what the user had read when drawing began
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(render, "snapshot", snapshot)
+    code, out, _ = run(capsys, *SMALL, "--runs", "2", "--snapshot", str(tmp_path / "s.png"))
+    assert code == 0
+    assert len(seen) == 2  # one picture per condition
+    assert "Metrics by condition" in seen[0]
+    assert "Choice statistics by condition" in seen[0]
+    assert "snapshot of" not in seen[0]
+    assert "snapshot of proximity run 0 at tick" in out
+    assert f"{tmp_path / 's-urgency-alpha-0.7.png'}" in out
+
+
+def test_help_says_which_outputs_are_one_file_per_condition(capsys):
+    code, out, _ = run(capsys, "--help")
+    assert code == 0
+    text = " ".join(out.split())
+    for option, suffix in (("--snapshot", ".png"), ("--animate", ".gif or .mp4"),
+                           ("--trajectories", ".npz"), ("--mcap", ".mcap")):  # fmt: skip
+        sentence = f"With several conditions, one file per condition: STEM-<condition>{suffix}."
+        assert sentence in text.split(option, 1)[1], option
+    assert "event log of every condition, in one file" in text
+
+
+def test_compilation_shows_on_the_progress_line_and_says_how_long(capsys, monkeypatch):
+    from swarmtag.sim import fast
+
+    monkeypatch.setattr(fast, "kernel_compiled", lambda: False)
+    code, out, err = run(capsys, *SMALL[:-1], "--progress", "--runs", "1", "--json")
+    assert code == 0
+    json.loads(out)
+    assert re.search(r"swarmtag: compiled the fast kernel in \d+ s", err)
+    assert "once: about a minute or two" not in err  # the progress line says it instead
+    code, out, err = run(capsys, *SMALL, "--runs", "1", "--json")  # no progress line
+    assert "compiling the fast simulation kernel" in err
+    assert re.search(r"compiled the fast kernel in \d+ s", err)

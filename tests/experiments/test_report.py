@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -163,3 +164,57 @@ def test_a_ranking_study_gets_the_ranking_table_and_the_pareto_figure(tmp_path):
     assert {row.split(" | ")[1] for row in rows} == {"proximity", "edf", "oracle:alpha=0.7"}
     assert (out / "small" / "pareto.png").stat().st_size > 10_000
     assert "small: the conditions ranked" in html
+
+
+# The small study under a name the published directions judge (proximity vs alpha = 0.7).
+AS_CONTROLLER_SELECTION = SMALL_TOML.replace('name = "small"', 'name = "controller-selection"')
+
+
+def test_the_report_opens_with_the_verdicts_and_warns_of_a_quick_run(tmp_path):
+    from swarmtag.experiments import reproduce
+    from swarmtag.experiments.robustness import judge_study
+    from swarmtag.experiments.verdicts import claim_verdict
+
+    study = load_study(
+        write_study(tmp_path, AS_CONTROLLER_SELECTION.replace("runs = 6", "runs = 10"))
+    )
+    quick = reproduce([study], out_dir=tmp_path / "quick", quick=True, workers=1)
+    html = quick.report.read_text(encoding="utf-8")
+    banner, verdicts = html.index('<p class="banner">'), html.index('<table class="verdicts">')
+    first_study = html.index("<details>")
+    assert banner < verdicts < first_study
+    assert html.index("<h2>Do the published findings reproduce?</h2>") < first_study
+    assert "Quick run: 2 runs per condition. Verdicts are underpowered" in html
+    assert (
+        "For the full reproduction, 10 runs per condition, run <code>swarmtag reproduce</code>"
+        in html
+    )
+    # one claim per direction naming the study; each underpowered at two runs
+    assert html.count("underpowered (2 runs;") == 4
+    assert "<summary><h2>controller-selection</h2>" in html
+    assert "2 runs per condition (quick), 2 conditions</span></summary>" in html
+
+    full = reproduce([study], out_dir=tmp_path / "full", workers=1)
+    html = full.report.read_text(encoding="utf-8")
+    assert 'class="banner"' not in html
+    assert "Quick run" not in html
+    assert html.index('<table class="verdicts">') < html.index("<details>")
+    assert "10 runs per condition, 2 conditions</span></summary>" in html
+    # the verdicts are those of the directions on the study's own summary, at ten runs
+    result = run_study(study, out_dir=tmp_path / "full", workers=1)  # from the store
+    assert result.computed_runs == 0
+    outcomes = judge_study(study.name, study.seed, result.reports)
+    assert len(outcomes) == 4
+    for outcome in outcomes:
+        expected = claim_verdict(appears=outcome.appears, significant=outcome.significant, runs=10)
+        assert expected != "underpowered"
+        row = re.search(
+            rf"<td rowspan=\"\d+\" class=\"claim\">{re.escape(outcome.direction.text)}</td>"
+            r"<td[^>]*>controller-selection</td><td[^>]*>([^<]*)</td>"
+            if len(outcome.parts) > 1
+            else rf"<td class=\"claim\">{re.escape(outcome.direction.text)}</td>"
+            r"<td>controller-selection</td><td[^>]*>([^<]*)</td>",
+            html,
+        )
+        assert row is not None, outcome.direction.name
+        assert row.group(1) == expected

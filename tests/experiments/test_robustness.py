@@ -110,10 +110,14 @@ def test_the_tables_agree_with_the_counts():
     assert markdown.startswith("# Robustness of the published directions over 3 master seeds\n")
     assert "scalability: 0-2" in markdown
     rows = [line for line in markdown.splitlines() if line.startswith("|")]
-    assert all(row.count("|") == 7 for row in rows)  # six cells each: no stray pipes
+    claims = rows[: rows.index("| Direction | Study | Scale | Condition | Appears | Significant |")]
+    assert claims[0] == (
+        "| Direction | Study | Published | Rule | Appears | Significant | Verdict |"
+    )
+    assert all(row.count("|") == 8 for row in claims)  # seven cells each: no stray pipes
     assert (
         "| urgency-aware selection raises PA at every alpha and every scale | scalability | "
-        "diff pa > 0, p < 0.05 | 3 / 3 | 2 / 3 | reproduced robustly |"
+        "direction only | diff pa > 0, p < 0.05 | 3 / 3 | 2 / 3 | reproduced robustly |"
     ) in rows
     assert "| pa-raised | scalability | 5x10 | urgency:alpha=0.7 | 3 / 3 | 2 / 3 |" in rows
     data = json.loads(json.dumps(robustness_json(summaries, seeds=seeds), allow_nan=False))
@@ -123,9 +127,37 @@ def test_the_tables_agree_with_the_counts():
     assert (claim["appeared"], claim["significant"]) == (3, 2)
     assert [entry["significant"] for entry in claim["per_seed"]] == [True, True, False]
     assert data["seeds"] == seeds
+    assert claim["published"] == {"text": "direction only", "values": {}, "note": ""}
     section = robustness_section(summaries, seeds=seeds)
     assert section.tables_html[0].count("<tr>") == 1 + 3
+    assert "<th>Published</th>" in section.tables_html[0]
+    (each,) = section.parts  # the long per-part table, folded
+    assert each.summary.startswith("4 rows")  # 5x10, 20x40, the trend, controller selection
+    assert each.tables_html[0].count("<tr>") == 1 + 4
     assert console_lines(summaries)[2] == (
         "the PA gain grows with swarm size [scalability]: appears in 1 / 3 seeds, "
         "significant in 0 / 3: on some seeds"
     )
+
+
+def test_seeds_md_takes_the_published_numbers_from_the_directions():
+    physical = [
+        outcome("pa-raised", "physical-style", seed, part("default", True, seed == 0))
+        for seed in range(2)
+    ] + [outcome("throughput-close", "physical-style", 0, part("default", True, False))]
+    summaries = robustness(physical)
+    markdown = robustness_markdown(summaries, seeds={"physical-style": [0, 1]})
+    pa = BY_NAME["pa-raised"].published_in("physical-style")
+    assert (
+        "| urgency-aware selection raises PA at every alpha and every scale | physical-style | "
+        "+0.23 (\N{GREEK SMALL LETTER ALPHA} 0.7), +0.11 (\N{GREEK SMALL LETTER ALPHA} 3), "
+        f"+0.13 (\N{GREEK SMALL LETTER ALPHA} 9); {pa.note} | diff pa > 0, p < 0.05 | 2 / 2 | "
+        "1 / 2 | on some seeds |"
+    ) in markdown
+    assert "| physical-style | -1.2 % (\N{GREEK SMALL LETTER ALPHA} 0.7) | diff throughput" in (
+        markdown
+    )
+    data = robustness_json(summaries, seeds={"physical-style": [0, 1]})
+    assert data["claims"][0]["published"]["values"] == {
+        "urgency:alpha=0.7": 0.23, "urgency:alpha=3.0": 0.11, "urgency:alpha=9.0": 0.13,
+    }  # fmt: skip

@@ -3,7 +3,11 @@
 Each function draws one figure from a ``MetricsReport`` (or per-urgency
 latencies) and writes it as a PNG atomically; matplotlib is imported
 lazily (the ``plot`` extra). These are the figures of the published study,
-plus latency per urgency level.
+plus latency per urgency level. Each condition keeps one colour in every
+figure (``condition_colours``: viridis along a one-parameter sweep, a
+qualitative palette otherwise), legends sit outside the axes, and each PNG
+carries a one-sentence caption (its ``Description`` text, which
+``swarmtag.analysis.html`` shows under it).
 """
 
 from __future__ import annotations
@@ -18,16 +22,19 @@ from numpy.typing import NDArray
 
 from swarmtag._atomic import atomic_path
 from swarmtag._plotting import pyplot
+from swarmtag.analysis.html import CAPTION_KEY
 from swarmtag.analysis.latency import UrgencyLatency, latency_by_urgency
 from swarmtag.analysis.ranking import RankRow
 from swarmtag.analysis.runs import ConditionRuns
 from swarmtag.analysis.summary import MetricsReport
 from swarmtag.analysis.tables import metric_label, unit_word
-from swarmtag.errors import StatisticsError
+from swarmtag.errors import PolicyError, StatisticsError
 from swarmtag.io import CarrierLog
 from swarmtag.policy import Urgency, Weighted, parse_policy
 
 __all__ = [
+    "condition_colours",
+    "draw_curves",
     "latency_curve_figure",
     "pa_curve_figure",
     "pareto_figure",
@@ -37,39 +44,94 @@ __all__ = [
 ]
 
 _SIZE: Final = (6.4, 4.2)
+_SWEEP_RANGE: Final = (0.0, 0.88)
+"""The stretch of viridis a sweep spans: its last yellows are too pale on white."""
+Colour = tuple[float, float, float, float]
+"""RGBA, each 0-1 (matplotlib's)."""
 
 
-def _save(fig: Any, path: str | os.PathLike[str]) -> None:  # noqa: ANN401 - a matplotlib Figure
+def _save(fig: Any, path: str | os.PathLike[str], caption: str) -> None:  # noqa: ANN401 - a Figure
+    """Write the PNG with ``caption`` as its description; the bounds take in outside legends."""
     fig.tight_layout()
     with atomic_path(path) as temp:
-        fig.savefig(temp, format="png", dpi=120)
+        fig.savefig(
+            temp, format="png", dpi=120, bbox_inches="tight", metadata={CAPTION_KEY: caption}
+        )
+
+
+def _outside_legend(ax: Any, **options: Any) -> Any:  # noqa: ANN401 - matplotlib Axes, Legend
+    """A legend right of the axes, top-aligned, so that it never covers the data."""
+    return ax.legend(
+        loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=8, **options
+    )
+
+
+def condition_colours(names: Sequence[str]) -> dict[str, Colour]:
+    """One distinct colour per condition, the same in every figure of a report.
+
+    A sweep of one parameter (all weighted, or all urgency) runs along
+    viridis in parameter order, so neighbours look alike and the ends apart;
+    other sets take tab10 (tab20 past ten conditions) in the given order.
+    """
+    plt = pyplot()
+    if _sweepable(names):
+        ordered = sorted(names, key=_parameter)
+        low, high = _SWEEP_RANGE
+        steps = np.linspace(low, high, len(ordered))
+        cmap = plt.get_cmap("viridis")
+        return {name: tuple(cmap(float(step))) for name, step in zip(ordered, steps, strict=True)}
+    palette = plt.get_cmap("tab10" if len(names) <= 10 else "tab20")
+    return {name: tuple(palette(i % palette.N)) for i, name in enumerate(names)}
+
+
+def draw_curves(ax: Any, report: MetricsReport, *, pa: bool) -> None:  # noqa: ANN401 - an Axes
+    """PA(p) (``pa``) or pooled latency against the percentile, one line and 95 % band each.
+
+    Draws on a matplotlib ``Axes`` the caller owns: the figure files and the
+    notebook's plots (``swarmtag.simulate(...).plot_pa``) share it. Each
+    condition in its ``condition_colours`` colour, the legend right of the axes.
+    """
+    colours = condition_colours([c.condition for c in report.conditions])
+    band = min(0.2, 0.8 / len(colours))  # many overlapping bands: fainter, or they turn to mud
+    for statistics in report.conditions:
+        curve = statistics.pa_curve if pa else statistics.latency_curve
+        colour = colours[statistics.condition]
+        ax.plot(
+            curve.x, curve.value, marker="o", markersize=3, color=colour,
+            label=statistics.condition,
+        )  # fmt: skip
+        ax.fill_between(curve.x, curve.low, curve.high, color=colour, alpha=band, lw=0)
+    if pa:
+        ax.set_xlabel("threshold p (%)")
+        ax.set_ylabel("PA(p), mean over runs")
+        ax.set_ylim(0, 1.02)
+    else:
+        ax.set_xlabel("percentile of pooled latencies")
+        ax.set_ylabel(f"latency ({unit_word(report.time_unit)})")
+    ax.set_title(
+        f"{'Priority alignment' if pa else 'Latency'} with 95 % bootstrap bands "
+        f"({report.n_resamples} resamples)",
+        fontsize=10,
+    )
+    ax.grid(alpha=0.3)
+    _outside_legend(ax)
+
+
+_CURVE_CAPTIONS: Final = {
+    True: "Priority alignment PA(p), the share of the p % most urgent carriers among the first "
+    "p % delivered, against the threshold p: the mean over runs per condition, its 95 % "
+    "bootstrap band shaded.",
+    False: "Latency of the delivered carriers, pooled over runs, at each percentile per "
+    "condition, its 95 % bootstrap band shaded; lower is faster.",
+}
 
 
 def _curves(report: MetricsReport, path: str | os.PathLike[str], *, pa: bool) -> None:
     plt = pyplot()
     fig, ax = plt.subplots(figsize=_SIZE)
     try:
-        for statistics in report.conditions:
-            curve = statistics.pa_curve if pa else statistics.latency_curve
-            (line,) = ax.plot(
-                curve.x, curve.value, marker="o", markersize=3, label=statistics.condition
-            )
-            ax.fill_between(curve.x, curve.low, curve.high, color=line.get_color(), alpha=0.2)
-        if pa:
-            ax.set_xlabel("threshold p (%)")
-            ax.set_ylabel("PA(p), mean over runs")
-            ax.set_ylim(0, 1.02)
-        else:
-            ax.set_xlabel("percentile of pooled latencies")
-            ax.set_ylabel(f"latency ({unit_word(report.time_unit)})")
-        ax.set_title(
-            f"{'Priority alignment' if pa else 'Latency'} with 95 % bootstrap bands "
-            f"({report.n_resamples} resamples)",
-            fontsize=10,
-        )
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        _save(fig, path)
+        draw_curves(ax, report, pa=pa)
+        _save(fig, path, _CURVE_CAPTIONS[pa])
     finally:
         plt.close(fig)
 
@@ -109,7 +171,9 @@ def sweep_figure(
     names = [c.condition for c in report.conditions]
     x = np.array([_parameter(name) for name in names])
     order = np.argsort(x)
+    colours = condition_colours(names)
     plt = pyplot()
+    parameter = "w" if isinstance(parse_policy(names[0]), Weighted) else "alpha"
     fig, axes = plt.subplots(1, len(metrics), figsize=(4.2 * len(metrics), 3.8), squeeze=False)
     try:
         for ax, metric in zip(axes[0], metrics, strict=True):
@@ -127,13 +191,22 @@ def sweep_figure(
                     for e in estimates
                 ]
             )
-            ax.plot(x[order], value, marker="o", color="tab:blue")
-            ax.fill_between(x[order], low, high, color="tab:blue", alpha=0.2)
-            ax.set_xlabel("w" if isinstance(parse_policy(names[0]), Weighted) else "alpha")
+            ax.plot(x[order], value, color="0.45", zorder=1)
+            ax.fill_between(x[order], low, high, color="0.5", alpha=0.2, lw=0)
+            ax.scatter(
+                x[order], value, c=[colours[names[i]] for i in order], s=30, zorder=2,
+                edgecolors="k", linewidths=0.5,
+            )  # fmt: skip
+            ax.set_xlabel(parameter)
             ax.set_ylabel(metric_label(metric, report.time_unit))
             ax.grid(alpha=0.3)
         fig.suptitle("Parameter sweep, values with 95 % bootstrap CIs", fontsize=10)
-        _save(fig, path)
+        labels = " and ".join(metric_label(m, report.time_unit) for m in metrics)
+        caption = (
+            f"{labels} against the policy parameter {parameter}, one point per condition "
+            "(coloured as in the curves) with its 95 % bootstrap interval shaded."
+        )
+        _save(fig, path, caption)
     finally:
         plt.close(fig)
 
@@ -186,7 +259,12 @@ def pareto_figure(
         fig.suptitle(
             "PA against throughput (95 % CIs); dashed: the Pareto front; colour: P95", fontsize=10
         )
-        _save(fig, path)
+        caption = (
+            "PA against throughput per condition, one panel per swarm size, with 95 % bootstrap "
+            "intervals as bars and P95 latency as colour; the dashed line joins the conditions "
+            "no other beats on both PA and throughput (the Pareto front)."
+        )
+        _save(fig, path, caption)
     finally:
         plt.close(fig)
 
@@ -199,28 +277,42 @@ def urgency_latency_figure(
 ) -> None:
     """Mean and P95 latency per urgency level at run start, one line pair per condition."""
     plt = pyplot()
+    colours = condition_colours(list(by_condition))
     fig, ax = plt.subplots(figsize=_SIZE)
     try:
         for name, levels in by_condition.items():
             u = [level.urgency for level in levels]
             mean = _floats(level.mean for level in levels)
             p95 = _floats(level.p95 for level in levels)
-            (line,) = ax.plot(u, mean, marker="o", label=f"{name} mean")
-            ax.plot(u, p95, marker="^", linestyle="--", color=line.get_color(), label=f"{name} P95")
+            ax.plot(u, mean, marker="o", markersize=4, color=colours[name], label=name)
+            ax.plot(u, p95, marker="^", markersize=4, linestyle="--", color=colours[name])
         ax.set_xlabel("urgency at run start")
         ax.set_ylabel(f"latency ({unit_word(time_unit)})")
         ax.set_xticks(range(10))
         ax.set_title("Latency per urgency level (delivered carriers)", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, ncol=2)
-        _save(fig, path)
+        # One legend (conditions by colour, then the two line styles), so the bounds hold it.
+        handles, _ = ax.get_legend_handles_labels()
+        handles += [
+            plt.Line2D([], [], color="0.3", marker="o", markersize=4, label="mean"),
+            plt.Line2D([], [], color="0.3", marker="^", markersize=4, ls="--", label="P95"),
+        ]
+        _outside_legend(ax, handles=handles)
+        caption = (
+            "Mean (solid) and P95 (dashed) latency of the delivered carriers by the urgency "
+            "level they had at run start, per condition; the most urgent are on the right."
+        )
+        _save(fig, path, caption)
     finally:
         plt.close(fig)
 
 
 def _sweepable(names: Sequence[str]) -> bool:
     """Two or more conditions of one parametrised policy (all weighted, or all urgency)."""
-    kinds = {type(parse_policy(name)) for name in names}
+    try:
+        kinds = {type(parse_policy(name)) for name in names}
+    except PolicyError:  # a rule of one's own not loaded here: not a sweep
+        return False
     return len(names) >= 2 and len(kinds) == 1 and kinds <= {Weighted, Urgency}
 
 

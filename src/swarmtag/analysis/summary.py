@@ -9,6 +9,7 @@ keys comes ``undelivered_differs``.
 
 from __future__ import annotations
 
+import reprlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
@@ -27,6 +28,12 @@ __all__ = ["DEFAULT_BASELINE", "JsonValue", "MetricsReport", "choose_baseline", 
 
 DEFAULT_BASELINE: Final = "proximity"
 """The baseline when none is named (else the first condition in sorted order)."""
+
+_SHORT: Final = reprlib.Repr()
+"""Cuts a condition name shown in a message (a name can be any text)."""
+_SHORT.maxstring = 60
+_LISTED: Final = 12
+"""Conditions a refusal lists by name (a sweep may have many)."""
 
 JsonValue = None | bool | int | float | str | list["JsonValue"] | dict[str, "JsonValue"]
 
@@ -69,11 +76,26 @@ class MetricsReport:
     comparisons: tuple[Comparison, ...]
 
     def condition(self, name: str) -> ConditionStatistics:
-        """The statistics of one condition."""
-        for statistics in self.conditions:
-            if statistics.condition == name:
-                return statistics
-        raise StatisticsError(f"no condition {name!r} in this report")
+        """The statistics of one condition; ``StatisticsError`` naming the report's otherwise.
+
+        The refusal shows at most a few dozen characters of what was asked for
+        (a report or an array passed by mistake would otherwise fill the screen).
+        """
+        checked: object = name  # names come from notebooks and scripts, outside the type checker
+        if isinstance(checked, str):
+            for statistics in self.conditions:
+                if statistics.condition == checked:
+                    return statistics
+        names = [s.condition for s in self.conditions]
+        known = ", ".join(names[:_LISTED]) + (
+            f", ... ({len(names)} in all)" if len(names) > _LISTED else ""
+        )
+        asked = (
+            f"no condition {_SHORT.repr(checked)}"
+            if isinstance(checked, str)
+            else f"a condition is named by a str, not a {type(checked).__name__}"
+        )
+        raise StatisticsError(f"{asked}; this report has {known}")
 
     def to_json(self) -> dict[str, JsonValue]:
         """The JSON object of SPEC §8.2 (``None`` becomes ``null``)."""

@@ -38,6 +38,7 @@ __all__ = [
     "markdown_tables",
     "metric_cells",
     "metric_label",
+    "pa_at_delivery_notes",
     "relative_change",
     "scalability_html",
     "scalability_notes",
@@ -210,12 +211,19 @@ def censoring_notes(report: MetricsReport) -> list[str]:
             f"Runs without run_end in the log ({counts}) end at their latest pickup or "
             "delivery: a weaker lower bound."
         )
-    if any("pa_at_delivery" in c.metrics for c in report.conditions):
-        notes.append(
+    return notes + pa_at_delivery_notes(report)
+
+
+def pa_at_delivery_notes(report: MetricsReport) -> list[str]:
+    """What PA at delivery is, where the report has it (one line), else nothing."""
+    if not any("pa_at_delivery" in c.metrics for c in report.conditions):
+        return []
+    return [
+        (
             "PA at delivery ranks carriers by their urgency when delivered (undelivered: at "
             "run end), a comparison aid; PA itself ranks by urgency at run start."
         )
-    return notes
+    ]
 
 
 def flag_notes(report: MetricsReport) -> list[str]:

@@ -11,138 +11,25 @@ from pathlib import Path
 from typing import overload
 
 import click
-from rich.console import Console, JustifyMethod
-from rich.table import Table
+from rich.console import Console
 
 from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
 from swarmtag._checks import MAX_SEED, check_number
 from swarmtag._outputs import OutputPlan, Stage
-from swarmtag.analysis import (
-    CENSORED_METRICS,
-    CORE_METRICS,
-    OPTIONAL_METRICS,
-    MetricsReport,
-    summarize,
-    trim_warmup,
-)
-from swarmtag.analysis.choice_tables import (
-    choice_notes,
-    choice_rows,
-    choices_html,
-    choices_latex,
-    choices_markdown,
-)
+from swarmtag.analysis import MetricsReport, summarize, trim_warmup
+from swarmtag.analysis.choice_tables import choices_html, choices_latex, choices_markdown
 from swarmtag.analysis.choices import ConditionChoices, choice_statistics
 from swarmtag.analysis.html import Section, write_html
-from swarmtag.analysis.tables import (
-    FLAG,
-    UNDERPOWERED,
-    censoring_notes,
-    flag_notes,
-    flagged,
-    format_interval,
-    format_p_value,
-    html_tables,
-    latex_tables,
-    markdown_tables,
-    metric_cells,
-    metric_label,
-    underpowered_notes,
-    unit_word,
-)
+from swarmtag.analysis.tables import html_tables, latex_tables, markdown_tables, unit_word
 from swarmtag.analysis.window import window_note
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
+from swarmtag.cli._report import render_choices, render_report
 from swarmtag.errors import StatisticsError
 from swarmtag.io import CarrierLog, EventTable, read_event_log, read_event_table
 
 __all__ = ["metrics", "render_choices", "render_report", "summarize_with_choices"]
-
-
-def _time_note(time_unit: str | None) -> str:
-    if time_unit == "s":
-        return "Times are in seconds (time_unit s)."
-    if time_unit == "tick":
-        return "Times are in simulator ticks (time_unit tick)."
-    return (
-        "The log does not state its time unit (no time_unit column): "
-        "ticks for simulated runs, seconds for physical trials."
-    )
-
-
-def render_report(report: MetricsReport, console: Console) -> None:
-    """The KPI table, the difference table and the notes of a report, on ``console``."""
-    level = f"{report.confidence_level * 100:g} %"
-    kpis = Table(title=f"Metrics by condition: value [{level} CI]", title_justify="left")
-    kpis.add_column("Metric")
-    for statistics in report.conditions:
-        kpis.add_column(statistics.condition, justify="right")
-    kpis.add_row("Runs", *(str(s.kpis.runs) for s in report.conditions))
-    for metric in CORE_METRICS:
-        kpis.add_row(metric_label(metric, report.time_unit), *metric_cells(report, metric))
-    kpis.add_row("Total deliveries", *(str(s.kpis.total_deliveries) for s in report.conditions))
-    kpis.add_row("Undelivered carriers", *(str(s.kpis.undelivered) for s in report.conditions))
-    optional = [m for m in OPTIONAL_METRICS if any(m in s.metrics for s in report.conditions)]
-    for metric in (*CENSORED_METRICS, *optional):
-        kpis.add_row(metric_label(metric, report.time_unit), *metric_cells(report, metric))
-    console.print(kpis)
-
-    if report.comparisons:
-        diffs = Table(
-            title=f"Differences from the baseline {report.baseline} (condition - baseline)",
-            title_justify="left",
-        )
-        columns: tuple[tuple[str, JustifyMethod], ...] = (
-            ("Condition", "left"),
-            ("Metric", "left"),
-            (f"Difference [{level} CI]", "right"),
-            ("p (bootstrap)", "right"),
-            ("p (Mann-Whitney)", "right"),
-        )
-        for name, justify in columns:
-            diffs.add_column(name, justify=justify)
-        for comparison in report.comparisons:
-            interval = comparison.confidence_interval
-            weak = f" {UNDERPOWERED}" if comparison.underpowered else ""
-            diffs.add_row(
-                comparison.condition,
-                metric_label(comparison.metric, report.time_unit)
-                + (f" {FLAG}" if flagged(comparison) else ""),
-                format_interval(comparison.diff, interval.low, interval.high) + weak,
-                format_p_value(comparison.p_bootstrap, report.n_resamples) + weak,
-                format_p_value(comparison.p_mannwhitney, report.n_resamples),
-            )
-        console.print(diffs)
-    else:
-        console.print(f"Only one condition ({report.baseline}): nothing to compare.")
-
-    undelivered = ", ".join(f"{s.condition} {s.kpis.undelivered}" for s in report.conditions)
-    console.print(
-        "Latency covers delivered carriers only (undelivered carriers have none); "
-        f"undelivered: {undelivered}.",
-        highlight=False,
-    )
-    for note in (*censoring_notes(report), *flag_notes(report), *underpowered_notes(report)):
-        console.print(note, highlight=False)
-    console.print(_time_note(report.time_unit), highlight=False)
-    for statistics in report.conditions:
-        for metric in statistics.metrics:
-            estimate = statistics.estimate(metric)
-            missing = estimate.n_undefined
-            if missing and estimate.value is not None:  # undefined outright shows as n/a
-                console.print(
-                    f"{metric_label(metric, report.time_unit)} of {statistics.condition} "
-                    "was undefined in "
-                    f"{missing} of {report.n_resamples} resamples (left out of its CI).",
-                    highlight=False,
-                )
-    console.print(
-        f"CIs: bootstrap over whole runs, {report.n_resamples} resamples, seed {report.seed}; "
-        "p (bootstrap) = min(1, 2 min(#diff*<=0, #diff*>=0) / B); "
-        "Mann-Whitney U two-sided on per-run values (KM P95 has none).",
-        highlight=False,
-    )
 
 
 @overload
@@ -173,20 +60,6 @@ def summarize_with_choices(
         seed=seed,
     )
     return report, choices
-
-
-def render_choices(choices: Sequence[ConditionChoices], console: Console) -> None:
-    """The choice statistics (selections, candidates, double pursuits, ...) on ``console``."""
-    header, rows = choice_rows(choices)
-    table = Table(title="Choice statistics by condition (event table)", title_justify="left")
-    table.add_column(header[0])
-    for name in header[1:]:
-        table.add_column(name, justify="right")
-    for row in rows:
-        table.add_row(*row)
-    console.print(table)
-    for note in choice_notes(choices):
-        console.print(note, highlight=False)
 
 
 def _write_html(

@@ -3,27 +3,30 @@
 from __future__ import annotations
 
 import json
-import re
 import sys
+import time
 from collections.abc import Sequence
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Final
 
 import click
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.console import Console
 
 from swarmtag._checks import MAX_RUN_INDEX, MAX_SEED
-from swarmtag._outputs import OutputPlan, Stage
+from swarmtag._outputs import OutputPlan
 from swarmtag._resources import check_memory
 from swarmtag.cli._console import make_console
+from swarmtag.cli._drawing import PER_CONDITION_HELP, Drawn, draw, plan_outputs, progress_bar
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
+from swarmtag.cli._report import render_choices, render_report
 from swarmtag.cli._scenario import (
     backend_option,
     build_scenario,
     note_compilation,
     scenario_options,
 )
-from swarmtag.cli.metrics import render_choices, render_report, summarize_with_choices
+from swarmtag.cli.metrics import summarize_with_choices
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 from swarmtag.io.ros_types import require_rosbags
@@ -39,12 +42,14 @@ from swarmtag.sim import Scenario, simulate
 from swarmtag.sim.runner import LOG_BYTES_PER_CARRIER, batch_memory
 from swarmtag.sim.simulation import backend_for
 
-__all__ = ["DEFAULT_CONDITIONS", "run_conditions", "simulate_cmd"]
+__all__ = ["DEFAULT_CONDITIONS", "compile_pending", "run_conditions", "simulate_cmd"]
 
 DEFAULT_CONDITIONS: Final = ("proximity", "urgency:alpha=0.7")
 """Conditions run when none is named: the published baseline and the proposed policy."""
 CHUNK_RUNS: Final = 50
 """Runs simulated per call: bounds memory and paces the progress bar (results do not change)."""
+COMPILE_NOTE: Final = "compiling the fast kernel (first run only, about 1-2 min)"
+"""The progress line while numba compiles the kernel (measured: 1.5-3 min on one core)."""
 
 
 def _policies(
@@ -84,29 +89,6 @@ def _policies(
     return chosen
 
 
-def _per_condition(path: Path, policy: Policy, several: bool) -> Path:
-    """``snap.png`` for one condition; ``snap-urgency-alpha-0.7.png`` per condition for several."""
-    if not several or not path.name:  # "." or "": no file name, refused as a folder when planned
-        return path
-    slug = re.sub(r"[^A-Za-z0-9.]+", "-", policy.name).strip("-")
-    return path.with_name(f"{path.stem}-{slug}{path.suffix}")
-
-
-def _plan_outputs(
-    plan: OutputPlan,
-    policies: Sequence[Policy],
-    outputs: Sequence[tuple[str, Path | None, tuple[str, ...], bool]],
-) -> None:
-    """Refuse bad output paths before any work; per-condition pictures are planned one by one."""
-    several = len(policies) > 1
-    for option, path, suffixes, per_condition in outputs:
-        if path is None:
-            continue
-        targets = [_per_condition(path, p, several) for p in policies] if per_condition else [path]
-        for target in targets:
-            plan.file(option, target, suffixes=suffixes)
-
-
 def _check_work(
     scenario: Scenario,
     conditions: int,
@@ -131,6 +113,15 @@ def _check_work(
     )
 
 
+def compile_pending(backend: str) -> bool:
+    """Whether the next run on ``backend`` compiles the fast kernel first (once per machine)."""
+    if backend != "fast":
+        return False
+    from swarmtag.sim import fast  # noqa: PLC0415 - numba is an extra
+
+    return not fast.kernel_compiled()
+
+
 def run_conditions(
     scenario: Scenario,
     policies: Sequence[Policy],
@@ -141,23 +132,26 @@ def run_conditions(
     progress: bool = False,
     controller: str = "builtin",
     backend: str | None = None,
+    compiling: bool = False,
 ) -> tuple[CarrierLog, EventTable]:
-    """Simulate every condition in chunks of runs; the logs of all conditions, concatenated."""
+    """Simulate every condition in chunks of runs; the logs of all conditions, concatenated.
+
+    With ``compiling`` (``compile_pending``), the progress line says so, with
+    the elapsed time, while the first compiled condition's first chunk runs
+    (numba compiles then), and a line on stderr says how long it took.
+    """
     logs: list[CarrierLog] = []
     tables: list[EventTable] = []
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("runs"),
-        TimeRemainingColumn(),
-    )
-    with Progress(*columns, disable=not progress, transient=True) as bar:
+    with progress_bar(show=progress, unit="runs") as bar:
         task = bar.add_task("simulating", total=runs * len(policies))
         for policy in policies:
             bar.update(task, description=policy.name)
             for start in range(0, runs, CHUNK_RUNS):
                 count = min(CHUNK_RUNS, runs - start)
+                compiles = compiling and policy.compiled
+                if compiles:
+                    bar.update(task, description=COMPILE_NOTE)
+                began = time.monotonic()
                 result = simulate(
                     scenario,
                     policy,
@@ -167,65 +161,18 @@ def run_conditions(
                     controller=controller,
                     backend=backend,
                 )
+                if compiles:
+                    compiling = False
+                    took = f"swarmtag: compiled the fast kernel in {time.monotonic() - began:.0f} s"
+                    if progress:
+                        bar.console.print(took, highlight=False, markup=False)
+                    else:
+                        click.echo(took, err=True)
+                    bar.update(task, description=policy.name)
                 logs.append(result.carriers)
                 tables.append(result.events)
                 bar.advance(task, count)
     return CarrierLog.concat(logs), EventTable.concat(tables)
-
-
-def _draw(
-    scenario: Scenario,
-    policies: Sequence[Policy],
-    *,
-    seed: int,
-    run: int,
-    snapshot_path: Path | None,
-    animation_path: Path | None,
-    trajectories_path: Path | None,
-    mcap_path: Path | None,
-    stage: Stage,
-    controller: str,
-    backend: str | None,
-) -> list[str]:
-    """Re-run ``run`` of each condition recording it; draw and save it; say what was written."""
-    from swarmtag.sim.outputs.render import animate, snapshot  # noqa: PLC0415 - matplotlib is an extra
-
-    written = []
-    several = len(policies) > 1
-    for policy in policies:
-        result = simulate(
-            scenario,
-            policy,
-            seed=seed,
-            runs=1,
-            run_offset=run,
-            record=True,
-            controller=controller,
-            backend=backend,
-        )
-        traj = result.trajectories
-        assert traj is not None
-        if snapshot_path is not None:
-            target = _per_condition(snapshot_path, policy, several)
-            tick = snapshot(traj, stage.path(target), run=run)
-            written.append(f"snapshot of {policy.name} run {run} at tick {tick}: {target}")
-        if animation_path is not None:
-            target = _per_condition(animation_path, policy, several)
-            frames = animate(traj, stage.path(target), run=run)
-            written.append(f"animation of {policy.name} run {run} ({frames} frames): {target}")
-        if trajectories_path is not None:
-            target = _per_condition(trajectories_path, policy, several)
-            traj.save(stage.path(target))
-            written.append(
-                f"trajectories of {policy.name} run {run} ({traj.ticks} ticks): {target}"
-            )
-        if mcap_path is not None:
-            from swarmtag.sim.outputs.mcap import write_mcap  # noqa: PLC0415 - rosbags is an extra
-
-            target = _per_condition(mcap_path, policy, several)
-            ticks = write_mcap(stage.path(target), traj, result.carriers, result.events, run=run)
-            written.append(f"MCAP of {policy.name} run {run} ({ticks} ticks): {target}")
-    return written
 
 
 @click.command("simulate")
@@ -271,31 +218,39 @@ def _draw(
 )
 @scenario_options
 @click.option(
-    "--events", type=click.Path(path_type=Path), help="Write the event log (.csv or .parquet)."
+    "--events",
+    type=click.Path(path_type=Path),
+    help="Write the event log of every condition, in one file (.csv or .parquet).",
 )
 @click.option(
     "--event-table",
     type=click.Path(path_type=Path),
-    help="Write the long-format event table (.csv or .parquet).",
+    help="Write the long-format event table of every condition, in one file (.csv or .parquet).",
 )
-@click.option("--snapshot", type=click.Path(path_type=Path), help="Draw a run to a PNG.")
+@click.option(
+    "--snapshot",
+    type=click.Path(path_type=Path),
+    help="Draw a run to a PNG. " + PER_CONDITION_HELP.format(".png"),
+)
 @click.option(
     "--animate",
     "animation",
     type=click.Path(path_type=Path),
-    help="Animate a run (.gif or .mp4).",
+    help="Animate a run (.gif or .mp4). " + PER_CONDITION_HELP.format(".gif or .mp4"),
 )
 @click.option(
     "--trajectories",
     "trajectories_out",
     type=click.Path(path_type=Path),
-    help="Save the drawn run's per-tick trajectories for replay (.npz).",
+    help="Save the drawn run's per-tick trajectories for replay (.npz). "
+    + PER_CONDITION_HELP.format(".npz"),
 )
 @click.option(
     "--mcap",
     type=click.Path(path_type=Path),
     help="Write the drawn run as MCAP with ROS 2 messages (.mcap): for Foxglove, and "
-    "'swarmtag log import' gives its event log back (the bags extra).",
+    "'swarmtag log import' gives its event log back (the bags extra). "
+    + PER_CONDITION_HELP.format(".mcap"),
 )
 @click.option(
     "--draw-run",
@@ -360,7 +315,7 @@ def simulate_cmd(
     for option, source in (("--config", config), ("--profile", Path(profile))):
         if source is not None and source.is_file():
             plan.input(option, source)
-    _plan_outputs(
+    plan_outputs(
         plan,
         policies,
         [
@@ -372,18 +327,19 @@ def simulate_cmd(
             ("--mcap", mcap, (".mcap",), True),
         ],
     )
-    drawn = (snapshot, animation, trajectories_out, mcap)
+    drawn = Drawn(snapshot, animation, trajectories_out, mcap)
     if mcap is not None:
         require_rosbags()  # the missing extra is named before any work
-    recorded = any(path is not None for path in drawn)
     resolved = backend_for(controller, backend).name
     if resolved == "fast" and all(not p.compiled for p in policies):
         resolved = "reference"  # every condition falls back (simulate says so)
-    _check_work(scenario, len(policies), runs, run_offset, record=recorded, backend=resolved)
+    _check_work(scenario, len(policies), runs, run_offset, record=drawn.count > 0, backend=resolved)
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()
     show = sys.stderr.isatty() if progress is None else progress
-    note_compilation(resolved)
+    compiling = compile_pending(resolved)
+    if compiling and not show:
+        note_compilation(resolved)  # without a progress line, one line says why it waits
     with plan.writing() as stage:
         log, table = run_conditions(
             scenario,
@@ -394,10 +350,25 @@ def simulate_cmd(
             progress=show,
             controller=controller,
             backend=backend,
+            compiling=compiling,
         )
-        report, choices = summarize_with_choices(
-            log, table, baseline=baseline, resamples=resamples, seed=seed
-        )
+        status = Console(stderr=True).status(f"bootstrapping {resamples} resamples")
+        with status if show else nullcontext():
+            report, choices = summarize_with_choices(
+                log, table, baseline=baseline, resamples=resamples, seed=seed
+            )
+        if not as_json:  # the results first: drawing (a GIF above all) takes longer
+            line = _scenario_line(
+                scenario,
+                profile=profile,
+                runs=runs,
+                run_offset=run_offset,
+                seed=seed,
+                controller=controller,
+            )
+            console.print(line, markup=False)
+            render_report(report, console)
+            render_choices(choices, console)
         notes = []
         if events is not None:
             write_event_log(log, stage.path(events))
@@ -405,19 +376,17 @@ def simulate_cmd(
         if event_table is not None:
             write_event_table(table, stage.path(event_table))
             notes.append(f"event table ({len(table)} rows): {event_table}")
-        if recorded:
-            notes += _draw(
+        if drawn.count:
+            notes += draw(
                 scenario,
                 policies,
+                drawn,
                 seed=seed,
                 run=run_offset if draw_run is None else draw_run,
-                snapshot_path=snapshot,
-                animation_path=animation,
-                trajectories_path=trajectories_out,
-                mcap_path=mcap,
                 stage=stage,
                 controller=controller,
                 backend=backend,
+                progress=show,
             )
     if as_json:
         document = {**report.to_json(), "choices": [c.to_json() for c in choices]}
@@ -425,12 +394,20 @@ def simulate_cmd(
         for note in notes:
             click.echo(f"wrote {note}", err=True)
         return
+    for note in notes:
+        console.print(f"wrote {note}", markup=False)
+
+
+def _scenario_line(
+    scenario: Scenario, *, profile: str, runs: int, run_offset: int, seed: int, controller: str
+) -> str:
+    """What was simulated, in one sentence (then a blank line)."""
     bodies = (
         f"{scenario.carriers} carriers"
         if scenario.warehouse is None
         else scenario.warehouse.summary()
     )
-    console.print(
+    return (
         f"{scenario.robots} robots, {bodies}, "
         f"{scenario.run_ticks} ticks of {scenario.tick:g} s ({scenario.urgency.model} urgency), "
         f"{scenario.perception_summary()}, profile {profile}, {runs} runs "
@@ -438,7 +415,3 @@ def simulate_cmd(
         + ("" if controller == "builtin" else f", {controller} controller")
         + "\n"
     )
-    render_report(report, console)
-    render_choices(choices, console)
-    for note in notes:
-        console.print(f"wrote {note}")

@@ -18,13 +18,17 @@ the claimed sign and is *significant* when every part also passes its test:
   the bootstrap p-value of that change is below ``SIGNIFICANCE``.
 
 The rules read ``Effect`` records (``effects`` builds them from a
-``MetricsReport``); the statistics are ``swarmtag.analysis``'s.
+``MetricsReport``); the statistics are ``swarmtag.analysis``'s. What the
+published study reports for a direction in a study (``Published``: the
+direction alone, or its numbers from the physical trials' Table II) is
+declared here too, once, for every table that shows it.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Final
 
 import numpy as np
@@ -32,6 +36,8 @@ from numpy.typing import NDArray
 
 from swarmtag.analysis import ConfidenceInterval, MetricsReport, bootstrap_p_value
 from swarmtag.analysis.bootstrap import percentile_interval
+from swarmtag.errors import PolicyError
+from swarmtag.policy import Urgency, Weighted, parse_policy
 
 __all__ = [
     "CLOSE_MARGIN",
@@ -41,10 +47,12 @@ __all__ = [
     "Direction",
     "Effect",
     "Part",
+    "Published",
     "Rule",
     "Shift",
     "Trend",
     "effects",
+    "short_condition",
 ]
 
 SIGNIFICANCE: Final = 0.05
@@ -123,6 +131,36 @@ def _signed(sign: int, value: float | None) -> bool:
     return value is not None and sign * value > 0
 
 
+def _signed_number(value: float) -> str:
+    """Three significant digits with a sign, no exponent, no trailing zeros: ``+0.23``, ``-250``."""
+    if value == 0 or not math.isfinite(value):
+        return f"{value:g}"
+    decimals = max(0, 2 - math.floor(math.log10(abs(value))))
+    text = f"{value:+.{decimals}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
+
+
+def _percent(value: float, unit: str) -> str:
+    return f"{100 * value:+.1f} {unit}"
+
+
+def short_condition(name: str) -> str:
+    """A condition's short label for tables: alpha (the Greek letter) 0.7, ``w 0.5``, else the name.
+
+    >>> short_condition("weighted:w=0.50"), short_condition("proximity")
+    ('w 0.5', 'proximity')
+    """
+    try:
+        policy = parse_policy(name)
+    except PolicyError:
+        return name
+    if isinstance(policy, Urgency):
+        return f"\N{GREEK SMALL LETTER ALPHA} {policy.alpha:g}"
+    if isinstance(policy, Weighted):
+        return f"w {policy.w:g}"
+    return name
+
+
 def _check_sign(sign: int) -> None:
     if sign not in (-1, 1):
         msg = f"sign: {sign!r} is not +1 (raises, grows) or -1 (lowers, shrinks)"
@@ -142,6 +180,10 @@ class Shift:
     def describe(self) -> str:
         """The rule in one line, for tables."""
         return f"diff {self.metric} {'>' if self.sign > 0 else '<'} 0, p < {SIGNIFICANCE:g}"
+
+    def show(self, value: float) -> str:
+        """A figure this rule judges, as text: the difference itself (``+0.23``)."""
+        return _signed_number(value)
 
     def judge(self, scales: Mapping[str, Sequence[Effect]]) -> tuple[Part, ...]:
         """One part per scale and condition."""
@@ -177,6 +219,10 @@ class Close:
         """The rule in one line, for tables."""
         margin = f"{self.margin * 100:g} %"
         return f"diff {self.metric} / baseline and its 95 % CI within -{margin} .. +{margin}"
+
+    def show(self, value: float) -> str:
+        """A figure this rule judges, as text: the relative difference in percent (``-1.2 %``)."""
+        return _percent(value, "%")
 
     def judge(self, scales: Mapping[str, Sequence[Effect]]) -> tuple[Part, ...]:
         """One part per scale and condition: the relative difference and its interval."""
@@ -229,6 +275,10 @@ class Trend:
         way = "rises" if self.sign > 0 else "falls"
         return f"diff {self.metric} / baseline {way} from first to last scale, p < {SIGNIFICANCE:g}"
 
+    def show(self, value: float) -> str:
+        """A figure this rule judges, as text: the relative difference's change (``+3.1 pp``)."""
+        return _percent(value, "pp")
+
     def judge(self, scales: Mapping[str, Sequence[Effect]]) -> tuple[Part, ...]:
         """One part per condition present at both ends; none with fewer than two scales."""
         if len(scales) < 2:
@@ -265,6 +315,35 @@ Rule = Shift | Close | Trend
 
 
 @dataclass(frozen=True, kw_only=True)
+class Published:
+    """What the published study reports for one direction in one study.
+
+    Every direction is published (SPEC §6); ``values`` hold its numbers
+    where the study gives them, in the rule's own terms (a difference for
+    ``Shift``, a relative difference for ``Close``), keyed by condition.
+    """
+
+    values: tuple[tuple[str, float], ...] = ()
+    note: str = ""
+    """Context in a few words (the published means behind a difference)."""
+
+    def value(self, condition: str) -> float | None:
+        """The published figure of ``condition``, if the study gives one."""
+        return dict(self.values).get(condition)
+
+    def describe(self, rule: Rule) -> str:
+        """One line for tables: each value and condition, then the note; or ``direction only``."""
+        if not self.values:
+            return "direction only"
+        shown = ", ".join(f"{rule.show(v)} ({short_condition(c)})" for c, v in self.values)
+        return f"{shown}; {self.note}" if self.note else shown
+
+
+DIRECTION_ONLY: Final = Published()
+"""A direction the published study states without a number (the simulation studies)."""
+
+
+@dataclass(frozen=True, kw_only=True)
 class Direction:
     """One published direction: a sentence of SPEC §6, its rule, and the studies that test it."""
 
@@ -272,6 +351,12 @@ class Direction:
     text: str
     rule: Rule
     studies: tuple[str, ...]
+    published: Mapping[str, Published] = field(default_factory=dict, hash=False)
+    """The published numbers by study; a study not named here has the direction only."""
+
+    def published_in(self, study: str) -> Published:
+        """What the published study reports for this direction in ``study``."""
+        return self.published.get(study, DIRECTION_ONLY)
 
     def judge(self, reports: Mapping[str, MetricsReport]) -> tuple[Part, ...]:
         """The parts of this direction on one study's reports (scale -> report) of one seed."""
@@ -284,6 +369,8 @@ _EVERY_SIZE: Final = ("controller-selection", "physical-style", "scalability")
 """The studies that compare urgency-aware selection with proximity (3/7 sim, lab, larger swarms)."""
 _AT_3_7: Final = ("controller-selection", "physical-style")
 """The studies at 3 robots / 7 carriers with proximity as the baseline."""
+_TABLE_II: Final = "physical-style"
+"""The study of the published physical trials (their Table II gives numbers; 15-17 runs)."""
 
 DIRECTIONS: Final = (
     Direction(
@@ -291,6 +378,16 @@ DIRECTIONS: Final = (
         text="urgency-aware selection raises PA at every alpha and every scale",
         rule=Shift("pa", +1),
         studies=_EVERY_SIZE,
+        published={
+            _TABLE_II: Published(
+                values=(
+                    ("urgency:alpha=0.7", 0.23),
+                    ("urgency:alpha=3.0", 0.11),
+                    ("urgency:alpha=9.0", 0.13),
+                ),
+                note="PA 0.41 \N{RIGHTWARDS ARROW} 0.64 at \N{GREEK SMALL LETTER ALPHA} 0.7",
+            )
+        },
     ),
     Direction(
         name="p95-lowered",
@@ -309,6 +406,7 @@ DIRECTIONS: Final = (
         text="throughput stays close to the baseline",
         rule=Close("throughput"),
         studies=_EVERY_SIZE,
+        published={_TABLE_II: Published(values=(("urgency:alpha=0.7", -0.012),))},
     ),
     Direction(
         name="deliveries-close",
@@ -336,6 +434,10 @@ DIRECTIONS: Final = (
     ),
 )
 """SPEC §6's directions, each judged in the studies it names (against their proximity baseline).
+
+The published numbers are the physical trials' (Table II): PA 0.41 -> 0.64
+at alpha 0.7 (+0.23; +0.11 at 3, +0.13 at 9), throughput -1.2 % at 0.7;
+the simulation studies publish the directions only.
 
 The scalability study's claims are its PA gain and P95 gain (at every
 size, and growing with size), its deliveries and its throughput (close to

@@ -12,7 +12,9 @@ the scalability table (relative changes signed so that positive is better)
 and one panel set per size; a study with ``ranking = true`` gets its
 conditions ranked per size (``ranking.md``) and a Pareto figure
 (``pareto.png``). ``DIR/report.html`` collects everything with the
-study parameters, the code version and the wall time of the last run.
+study parameters, the code version and the wall time of the last run: it
+opens with the verdict on every published claim (``verdicts``), under a
+banner after a quick run, then folds each study into a ``<details>``.
 A warehouse scale's KPIs (tables, figures) cover the orders placed after its
 warm-up (``runner.kpi_log``); its exported logs keep every order.
 """
@@ -44,6 +46,7 @@ from swarmtag.analysis.tables import (
 )
 from swarmtag.analysis.window import window_note
 from swarmtag.errors import StudyError
+from swarmtag.experiments.directions import DIRECTIONS, Direction
 from swarmtag.experiments.runner import (
     QUICK_RESAMPLES,
     STORE_NAME,
@@ -53,6 +56,7 @@ from swarmtag.experiments.runner import (
 )
 from swarmtag.experiments.spec import Scale, Study
 from swarmtag.experiments.store import ResultsStore
+from swarmtag.experiments.verdicts import judge_reports, quick_banner, verdict_section
 from swarmtag.io import CarrierLog, EventTable
 
 __all__ = ["REPORT_NAME", "RUN_RECORD", "StudyRecord", "write_report", "write_run_record"]
@@ -213,7 +217,24 @@ def _facts(study: Study, runs: int, resamples: int, record: StudyRecord | None) 
     return facts
 
 
-def _study_sections(
+@dataclass(frozen=True, eq=False)
+class _StudyReport:
+    """One study in the report: its folded section, and what the verdicts and banner read."""
+
+    section: Section
+    reports: dict[str, MetricsReport]
+    runs: int
+    quick: bool
+
+
+def _summary_line(study: Study, runs: int, quick: bool) -> str:
+    """A folded study's line: its runs, conditions and swarm sizes."""
+    line = f"{runs} runs per condition{' (quick)' if quick else ''}, "
+    line += f"{len(study.conditions)} conditions"
+    return line + (f", {len(study.scales)} swarm sizes" if len(study.scales) > 1 else "")
+
+
+def _study_report(
     out_dir: Path,
     target_dir: Path,
     study: Study,
@@ -222,7 +243,7 @@ def _study_sections(
     resamples: int | None,
     export_format: str,
     computed: Sequence[StudyResult],
-) -> list[Section]:
+) -> _StudyReport:
     """Read ``study``'s runs from ``store`` and its run record from ``out_dir``.
 
     Its logs, tables and figures go to ``target_dir``.
@@ -233,10 +254,10 @@ def _study_sections(
     from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
 
     record = _read_record(out_dir, study)
+    quick = record is not None and record.quick
     with ResultsStore(store, read_only=True) as stored:
         runs = _stored_runs(stored, study)
         if resamples is None:
-            quick = record is not None and record.quick
             resamples = min(study.resamples, QUICK_RESAMPLES) if quick else study.resamples
         known = next(
             (
@@ -252,8 +273,8 @@ def _study_sections(
             target.mkdir(parents=True, exist_ok=True)
             key = study_key(study, part.key)
             stored.export(key, study.conditions, runs, target, fmt=export_format)
-    sections = []
-    for index, (scale, result) in enumerate(reports.items()):
+    scales = []
+    for scale, result in reports.items():
         report, choices = result.report, result.choices
         folder = target_dir / study.name / scale
         (folder / "figures").mkdir(parents=True, exist_ok=True)
@@ -261,23 +282,31 @@ def _study_sections(
         atomic_write_bytes(folder / "tables.md", markdown.encode())
         latex = latex_tables(report) + "\n" + choices_latex(choices)
         atomic_write_bytes(folder / "tables.tex", latex.encode())
-        figures = write_figures(report, result.log, folder / "figures")
-        title = study.name if len(reports) == 1 else f"{study.name}, swarm {scale}"
-        sections.append(
+        scales.append(
             Section(
-                title=title,
-                facts=_facts(study, runs, resamples, record) if index == 0 else {},
+                title=f"swarm {scale}",
                 tables_html=[html_tables(report), choices_html(choices)],
-                figures=figures,
+                figures=write_figures(report, result.log, folder / "figures"),
             )
         )
+    summaries = {key: result.report for key, result in reports.items()}
+    parts = []
     if len(reports) > 1:
-        sections.append(
-            _scalability_section(target_dir, study, {k: r.report for k, r in reports.items()})
-        )
+        parts += scales
+        parts.append(_scalability_section(target_dir, study, summaries))
     if study.ranking:
-        sections.append(_ranking_section(target_dir, study, reports))
-    return sections
+        parts.append(_ranking_section(target_dir, study, reports))
+    # One swarm size: its tables and figures are the study's own, not a sub-section.
+    own = scales[0] if len(reports) == 1 else Section(title=study.name)
+    section = Section(
+        title=study.name,
+        summary=_summary_line(study, runs, quick),
+        facts=_facts(study, runs, resamples, record),
+        tables_html=own.tables_html,
+        figures=own.figures,
+        parts=parts,
+    )
+    return _StudyReport(section=section, reports=summaries, runs=runs, quick=quick)
 
 
 def _ranking_section(out_dir: Path, study: Study, reports: Mapping[str, _ScaleResult]) -> Section:
@@ -329,6 +358,7 @@ def write_report(
     computed: Sequence[StudyResult] = (),
     store: str | os.PathLike[str] | None = None,
     sections: Sequence[Section] = (),
+    directions: Sequence[Direction] = DIRECTIONS,
 ) -> Path:
     """Event logs, tables, figures and ``report.html`` of ``studies`` from ``out_dir``'s store.
 
@@ -337,8 +367,10 @@ def write_report(
     ``events.<fmt>`` (``export_format``: ``csv`` or ``parquet``). ``computed``:
     ``run_study`` results of this process whose summaries match are reused
     (the same numbers, computed once). ``store``: the results store file
-    (default ``out_dir/results.duckdb``). ``sections`` close the report
-    (the robustness over master seeds).
+    (default ``out_dir/results.duckdb``). The report opens with the verdict
+    on each of ``directions`` in the studies it names (after a quick run,
+    under a banner); ``sections`` follow it (the robustness over master
+    seeds), then the studies, each folded.
     """
     folder = check_path(out_dir, what="DIR", error=StudyError)
     store_path = folder / STORE_NAME if store is None else Path(store)
@@ -350,9 +382,8 @@ def write_report(
     plan.folder("DIR", folder)
     with plan.writing() as stage:  # every file of the report, or none of them
         staged = stage.path(folder)
-        parts = []
-        for study in studies:
-            parts += _study_sections(
+        done = [
+            _study_report(
                 folder,
                 staged,
                 study,
@@ -361,10 +392,24 @@ def write_report(
                 export_format=export_format,
                 computed=computed,
             )
+            for study in studies
+        ]
+        claims = [
+            claim
+            for study, result in zip(studies, done, strict=True)
+            for claim in judge_reports(study.name, study.seed, result.reports, directions)
+        ]
+        banner = ""
+        if any(result.quick for result in done):
+            banner = quick_banner(
+                {study.name: result.runs for study, result in zip(studies, done, strict=True)},
+                {study.name: study.runs for study in studies},
+            )
         write_html(
             staged / REPORT_NAME,
             "swarmtag reproduction report",
-            [*parts, *sections],
+            [verdict_section(claims), *sections, *(result.section for result in done)],
             facts={"swarmtag": __version__, "studies": ", ".join(s.name for s in studies)},
+            banner=banner,
         )
     return folder / REPORT_NAME

@@ -13,7 +13,7 @@ folder of their own (``seed_folder``)::
     DIR/seed+<j>/<study>/...          offset j: the studies at seed + j (metrics, tables, figures)
     DIR/seed+<j>/report.html          the report of offset j
     DIR/seeds.json, DIR/seeds.md      the directions over the K seeds (``robustness``)
-    DIR/report.html                   offset 0's report, closed by the seeds summary
+    DIR/report.html                   offset 0's report, the seeds summary after its verdicts
 
 Every seed's results are judged against ``directions`` (SPEC §6) as they
 come in; only those small outcomes are kept, so memory does not grow with K.
@@ -192,7 +192,8 @@ def reproduce(
     ``scheduler``, ``progress`` and ``backend`` are ``run_study``'s.
     ``on_study`` hears of each study run as it finishes. With ``seeds > 1``
     every seed's results are judged against ``directions`` and the summary
-    is written to ``seeds.json``, ``seeds.md`` and the end of ``report.html``.
+    is written to ``seeds.json``, ``seeds.md`` and ``report.html`` (after the
+    verdicts on the first seed, which every report opens with).
     Everything that can be refused (``seeds``, a seed past the largest,
     memory) is refused before the first run.
     """
@@ -219,9 +220,9 @@ def reproduce(
         if offset == 0:
             first = results  # the main report, written last, reuses their summaries
         else:
-            write_report(target, specs, computed=results, store=store)
+            write_report(target, specs, computed=results, store=store, directions=directions)
     if seeds == 1:
-        report = write_report(folder, studies, computed=first, store=store)
+        report = write_report(folder, studies, computed=first, store=store, directions=directions)
         return Reproduction(
             report=report, seeds=1, runs=tuple(runs), robustness=(), summary_files=()
         )
@@ -237,6 +238,7 @@ def reproduce(
         computed=first,
         store=store,
         sections=[robustness_section(summaries, seeds=used)],
+        directions=directions,
     )
     return Reproduction(
         report=report, seeds=seeds, runs=tuple(runs), robustness=summaries, summary_files=files

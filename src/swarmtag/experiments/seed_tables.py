@@ -18,7 +18,15 @@ from swarmtag.experiments.robustness import ClaimSummary
 
 __all__ = ["console_lines", "robustness_json", "robustness_markdown", "robustness_section"]
 
-_CLAIM_HEADER: Final = ("Direction", "Study", "Rule", "Appears", "Significant", "Verdict")
+_CLAIM_HEADER: Final = (
+    "Direction",
+    "Study",
+    "Published",
+    "Rule",
+    "Appears",
+    "Significant",
+    "Verdict",
+)
 _PART_HEADER: Final = ("Direction", "Study", "Scale", "Condition", "Appears", "Significant")
 
 
@@ -41,8 +49,15 @@ def _rules_note() -> str:
         f"sign; it is significant when every part also has a bootstrap p below {SIGNIFICANCE:g} "
         f"(for 'close to the baseline': the 95 % interval of diff / baseline within "
         f"{CLOSE_MARGIN * 100:g} % either way). Reproduced robustly: significant in more than "
-        "half of the seeds; on some seeds: appears in at least one; else not reproduced."
+        "half of the seeds; on some seeds: appears in at least one; else not reproduced. "
+        "Published: the physical trials' numbers (Table II, in the rule's terms: a "
+        "difference, or % of the baseline); the simulation studies publish the direction only."
     )
+
+
+def _published(summary: ClaimSummary) -> str:
+    direction = summary.direction
+    return direction.published_in(summary.study).describe(direction.rule)
 
 
 def _count(value: int, seeds: int) -> str:
@@ -54,6 +69,7 @@ def _claim_rows(summaries: Sequence[ClaimSummary]) -> list[list[str]]:
         [
             s.direction.text,
             s.study,
+            _published(s),
             s.direction.rule.describe(),
             _count(s.appeared, len(s.outcomes)),
             _count(s.significant, len(s.outcomes)),
@@ -107,16 +123,22 @@ def robustness_markdown(
 def robustness_section(
     summaries: Sequence[ClaimSummary], *, seeds: Mapping[str, Sequence[int]]
 ) -> Section:
-    """The report's closing section: the same two tables as ``robustness_markdown``."""
+    """The report's section after the verdicts: the tables of ``robustness_markdown``.
+
+    The per-part table is folded: it is long, and the claims' table answers first.
+    """
+    parts = _part_rows(summaries)
+    each = Section(
+        title="Each part",
+        summary=f"{len(parts)} rows: every condition and swarm size of each direction",
+        paragraphs=["Every condition and swarm size of each direction, counted alike."],
+        tables_html=[html_table(_PART_HEADER, parts)],
+    )
     return Section(
         title=_title(_seed_count(seeds)),
         paragraphs=[_seeds_note(seeds), _rules_note()],
-        tables_html=[
-            html_table(_CLAIM_HEADER, _claim_rows(summaries)),
-            "<h3>Each part</h3>\n"
-            "<p>Every condition and swarm size of each direction, counted alike.</p>\n"
-            + html_table(_PART_HEADER, _part_rows(summaries)),
-        ],
+        tables_html=[html_table(_CLAIM_HEADER, _claim_rows(summaries))],
+        parts=[each],
     )
 
 
@@ -132,6 +154,12 @@ def _part_json(part: Part) -> JsonValue:
     }
 
 
+def _published_json(summary: ClaimSummary) -> JsonValue:
+    published = summary.direction.published_in(summary.study)
+    values: dict[str, JsonValue] = dict(published.values)
+    return {"text": _published(summary), "values": values, "note": published.note}
+
+
 def robustness_json(
     summaries: Sequence[ClaimSummary], *, seeds: Mapping[str, Sequence[int]]
 ) -> dict[str, JsonValue]:
@@ -141,6 +169,7 @@ def robustness_json(
             "direction": s.direction.name,
             "text": s.direction.text,
             "study": s.study,
+            "published": _published_json(s),
             "rule": s.direction.rule.describe(),
             "seeds": list(s.seeds),
             "appeared": s.appeared,
