@@ -139,8 +139,10 @@ def make_tag_files(folder: Path) -> None:
         TagModel,
         TagState,
         TagStatus,
+        derive_robot_key,
         derive_role_key,
         write_key_file,
+        write_robot_key_file,
         write_role_key_file,
     )
 
@@ -148,6 +150,7 @@ def make_tag_files(folder: Path) -> None:
     write_key_file(folder / "site.key", site)
     for role in Role:
         write_role_key_file(folder / f"{role.name.lower()}.key", role, derive_role_key(site, role))
+    write_robot_key_file(folder / "robot.key", 7, derive_robot_key(site, 7))  # robot 7's own key
     waiting = TagState(urgency=5, status=TagStatus.AWAITING_PICKUP, destination=2, marker=12)
     TagModel.provision(waiting, site_key=site, store=FileStore(folder / "tag.state"))
 

@@ -436,11 +436,11 @@ WRITE_OPTIONS: dict[str, Values] = {
 
 def _bench_writes() -> bytes:
     """A replay file for ``tag emulate``: writes to tag 12 under the template site key."""
-    from swarmtag.tag import Change, Role, TagStatus, WriteSigner, derive_role_key
+    from swarmtag.tag import Change, Role, TagStatus, WriteSigner, derive_robot_key, derive_role_key
 
     site = bytes(range(32))  # the key of the site.key template (fuzz_files.make_tag_files)
     operator = WriteSigner(1, Role.OPERATOR, derive_role_key(site, Role.OPERATOR))
-    robot = WriteSigner(7, Role.ROBOT, derive_role_key(site, Role.ROBOT))
+    robot = WriteSigner(7, Role.ROBOT, derive_robot_key(site, 7))
     lift = robot.sign(12, Change(status=TagStatus.PICKED_UP))
     writes = [
         operator.sign(12, Change(urgency=9, status=TagStatus.AWAITING_PICKUP)),

@@ -18,6 +18,7 @@ from swarmtag.tag import (
     TagState,
     TagStatus,
     WriteSigner,
+    derive_robot_key,
     derive_role_key,
     write_key_file,
 )
@@ -26,7 +27,8 @@ from swarmtag.tag.emulator import SoftwareTag
 
 SITE_KEY = bytes(range(100, 132))
 OPERATOR = derive_role_key(SITE_KEY, Role.OPERATOR)
-ROBOT = derive_role_key(SITE_KEY, Role.ROBOT)
+ROBOT = derive_robot_key(SITE_KEY, 7)  # robot 7's own key
+SHARED_ROBOT = derive_role_key(SITE_KEY, Role.ROBOT)  # the legacy key of all robots
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -382,3 +384,32 @@ def test_a_write_waiting_for_a_state_file_that_never_comes_fails(tmp_path):
     with pytest.raises(OSError, match="never created"):
         tag.write(write)
     assert tag.state.urgency == 0
+
+
+def test_the_shared_robot_key_is_a_legacy_setting_of_the_tag(capsys, work):
+    """Off for a new tag; --shared-robot-key turns it on (saved), --no-shared-robot-key off."""
+    shared = WriteSigner(writer=7, role=Role.ROBOT, key=SHARED_ROBOT)
+    operator = WriteSigner(writer=1, role=Role.OPERATOR, key=OPERATOR)
+    ready = operator.sign(12, Change(status=TagStatus.AWAITING_PICKUP))
+    replay_file(work / "a.txt", ready, shared.sign(12, Change(status=TagStatus.PICKED_UP)))
+    argv = ("--marker", "12", "--key-file", "site.key", "--state-file", "tag.bin")
+    code, out, _err = run(capsys, *argv, "--replay", "a.txt")
+    assert code == 0
+    assert "ForgedWrite (ATT 0x80)" in out.splitlines()[2]
+    replay_file(work / "b.txt", shared.sign(12, Change(status=TagStatus.PICKED_UP)))
+    code, out, _err = run(capsys, *argv, "--replay", "b.txt", "--shared-robot-key")
+    assert code == 0
+    assert out.splitlines()[1] == (
+        "note: this tag also accepts the legacy shared robot key (--no-shared-robot-key)"
+    )
+    assert out.splitlines()[2].startswith("accepted from writer 7 (robot, counter 1)")
+    replay_file(work / "c.txt", shared.sign(12, Change(status=TagStatus.IDLE)))
+    code, out, _err = run(capsys, *argv, "--replay", "c.txt")  # a stored tag keeps its setting
+    assert "accepted from writer 7" in out
+    replay_file(work / "d.txt", operator.sign(12, Change(status=TagStatus.AWAITING_PICKUP)),
+                shared.sign(12, Change(status=TagStatus.PICKED_UP)))  # fmt: skip
+    code, out, _err = run(capsys, *argv, "--replay", "d.txt", "--no-shared-robot-key")
+    assert "note:" not in out
+    assert "ForgedWrite (ATT 0x80)" in out.splitlines()[2]
+    tag = SoftwareTag.boot(site_key=SITE_KEY, store=FileStore(work / "tag.bin"))
+    assert (tag.shared_robot_key, tag.state.status) == (False, TagStatus.AWAITING_PICKUP)

@@ -15,10 +15,12 @@ from swarmtag.tag import (
     TagModel,
     TagState,
     TagStatus,
+    derive_robot_key,
     derive_role_key,
     generate_site_key,
     read_key_file,
     write_key_file,
+    write_robot_key_file,
     write_role_key_file,
 )
 from swarmtag.tag.counter import CounterFile
@@ -29,13 +31,17 @@ WAITING = TagState(urgency=5, status=TagStatus.AWAITING_PICKUP, destination=2, m
 
 @pytest.fixture
 def bench(tmp_path, monkeypatch):
-    """A site key, both role key files, and a software tag (marker 12) in a FileStore file."""
+    """A site key, robot 7's key, the operator key, the legacy shared robot key (shared.key),
+    and a software tag (marker 12) in a FileStore file."""
     monkeypatch.chdir(tmp_path)
     site = write_key_file(tmp_path / "site.key", generate_site_key())
-    for role in Role:
-        key = derive_role_key(read_key_file(site), role)
-        write_role_key_file(tmp_path / f"{role.name.lower()}.key", role, key)
-    TagModel.provision(WAITING, site_key=read_key_file(site), store=FileStore("tag.state"))
+    site_key = read_key_file(site)
+    write_robot_key_file(tmp_path / "robot.key", 7, derive_robot_key(site_key, 7))
+    operator = derive_role_key(site_key, Role.OPERATOR)
+    write_role_key_file(tmp_path / "operator.key", Role.OPERATOR, operator)
+    shared = derive_role_key(site_key, Role.ROBOT)
+    write_role_key_file(tmp_path / "shared.key", Role.ROBOT, shared)
+    TagModel.provision(WAITING, site_key=site_key, store=FileStore("tag.state"))
     return tmp_path
 
 
@@ -132,24 +138,84 @@ def test_a_lost_counter_file_is_refused_as_a_replay_and_a_restart_is_not(capsys,
     assert tag_state(bench).status is TagStatus.IDLE
 
 
+def test_a_robot_key_file_names_its_writer_and_binds_the_release(capsys, bench):
+    """Robot 7 writes without --writer; robot 9 cannot release what robot 7 lifted (issue 35)."""
+    site = read_key_file(bench / "site.key")
+    write_robot_key_file(bench / "robot9.key", 9, derive_robot_key(site, 9))
+    code, out, _err = run(capsys, ADDRESS, "--key-file", "robot.key", "--status", "picked_up",
+                          *LOOPBACK)  # fmt: skip
+    assert code == 0
+    assert "writer 7 (robot), counter 0" in out
+    code, out, err = run(capsys, ADDRESS, "--key-file", "robot9.key", "--status", "idle",
+                         *LOOPBACK)  # fmt: skip
+    assert (code, out) == (1, "")
+    assert err.startswith(
+        f"swarmtag: refused: tag 12 at {ADDRESS} refused the write: ATT error 0x84 "
+        "(IllegalTransition): a robot may only lift (AWAITING_PICKUP -> PICKED_UP) or release "
+        "(PICKED_UP -> IDLE) a carrier it lifted itself (the tag was PICKED_UP)"
+    )
+    assert tag_state(bench).status is TagStatus.PICKED_UP
+    code, _out, _err = run(capsys, ADDRESS, "--key-file", "operator.key", "--writer", "1000",
+                           "--status", "idle", *LOOPBACK)  # fmt: skip
+    assert code == 0  # an operator overrides
+    assert tag_state(bench).status is TagStatus.IDLE
+
+
+def test_the_shared_robot_key_is_refused_by_a_new_tag(capsys, bench):
+    code, _out, err = run(capsys, ADDRESS, "--key-file", "shared.key", "--writer", "7",
+                          "--status", "picked_up", *LOOPBACK)  # fmt: skip
+    assert code == 1
+    assert "ATT error 0x80 (ForgedWrite)" in err
+    assert "the shared robot key only on tags set to accept it" in err
+    assert tag_state(bench) == WAITING
+
+
+def test_a_write_reads_the_counter_file_once(capsys, bench, monkeypatch):
+    """A full table (65,536 writers) is read and parsed once per write (issue 35)."""
+    from swarmtag.tag import counter as counter_module
+    from swarmtag.tag.counter import format_counters, parse_counters
+
+    (bench / "robot.key.counters").write_bytes(format_counters(dict.fromkeys(range(65536), 3)))
+    parsed: list[int] = []
+    monkeypatch.setattr(
+        counter_module, "parse_counters", lambda d: parsed.append(1) or parse_counters(d)
+    )
+    monkeypatch.setattr(counter_module, "_SETTLED_NS", 0)  # the file above counts as settled
+    code, out, _err = run(capsys, ADDRESS, "--key-file", "robot.key", "--status", "picked_up",
+                          *LOOPBACK)  # fmt: skip
+    assert code == 0
+    assert "counter 4" in out
+    assert parsed == [1]
+    assert CounterFile(bench / "robot.key.counters").check() == {
+        **dict.fromkeys(range(65536), 3),
+        7: 4,
+    }
+
+
 @pytest.mark.parametrize(
     ("argv", "words"),
     [
         (("--key-file", "site.key", "--writer", "1", "--urgency", "3"), "is the site key file"),
-        (("--key-file", "robot.key", "--writer", "1", "--role", "operator", "--urgency", "3"),
+        (("--key-file", "robot.key", "--writer", "7", "--role", "operator", "--urgency", "3"),
          "--role operator does not match the key file robot.key, which holds the robot key"),
-        (("--key-file", "robot.key", "--writer", "1"), "give at least one of --urgency"),
-        (("--key-file", "robot.key", "--writer", "1", "--status", "idle", "--marker", "3"),
+        (("--key-file", "robot.key", "--writer", "9", "--status", "idle"),
+         "writer 9 does not match the key file robot.key, which is robot 7's key"),
+        (("--key-file", "operator.key", "--urgency", "3"),
+         "holds the operator key, shared by its writers: give this writer's id (--writer ID)"),
+        (("--key-file", "shared.key", "--status", "idle"),
+         "holds the robot key, shared by its writers: give this writer's id (--writer ID)"),
+        (("--key-file", "robot.key", "--writer", "7"), "give at least one of --urgency"),
+        (("--key-file", "robot.key", "--writer", "7", "--status", "idle", "--marker", "3"),
          "is marker 12, not 3: nothing was sent"),
-        (("--key-file", "robot.key", "--writer", "1", "--status", "idle", "--counter-file",
+        (("--key-file", "robot.key", "--writer", "7", "--status", "idle", "--counter-file",
           "site.key"), "is not a swarmtag counter file"),
-        (("--key-file", "robot.key", "--writer", "1", "--status", "idle", "--counter-file",
+        (("--key-file", "robot.key", "--writer", "7", "--status", "idle", "--counter-file",
           "missing/c"), "does not exist"),
         (("--key-file", "robot.key", "--writer", "70000", "--status", "idle"), "--writer"),
-        (("--key-file", "robot.key", "--writer", "1", "--status", "lifted"), "--status"),
-        (("--key-file", "robot.key", "--writer", "1", "--status", "idle", "--timeout", "nan"),
+        (("--key-file", "robot.key", "--writer", "7", "--status", "lifted"), "--status"),
+        (("--key-file", "robot.key", "--writer", "7", "--status", "idle", "--timeout", "nan"),
          "--timeout"),
-        (("--key-file", "robot.key", "--writer", "1", "--status", "idle", "--adapter", "eth0"),
+        (("--key-file", "robot.key", "--writer", "7", "--status", "idle", "--adapter", "eth0"),
          "not a BlueZ adapter name"),
     ],
 )  # fmt: skip
@@ -165,14 +231,14 @@ def test_bad_input_is_one_line_exit_2_and_nothing_is_sent(capsys, bench, argv, w
 
 
 def test_a_bad_address_is_refused(capsys, bench):
-    code, _out, err = run(capsys, "12", "--key-file", "robot.key", "--writer", "1",
+    code, _out, err = run(capsys, "12", "--key-file", "robot.key", "--writer", "7",
                           "--status", "idle", *LOOPBACK)  # fmt: skip
     assert code == 2
     assert "is not a Bluetooth address such as AA:BB:CC:DD:EE:FF" in err
 
 
 def test_loopback_needs_its_tag(capsys, bench):
-    code, _out, err = run(capsys, ADDRESS, "--key-file", "robot.key", "--writer", "1",
+    code, _out, err = run(capsys, ADDRESS, "--key-file", "robot.key", "--writer", "7",
                           "--status", "idle", "--backend", "loopback")  # fmt: skip
     assert code == 2
     assert "--backend loopback needs --loopback-state and --loopback-key" in err
@@ -186,7 +252,7 @@ def test_a_loopback_tag_that_is_no_file_is_refused_without_hanging(capsys, bench
     import os
 
     os.mkfifo(bench / "fifo")
-    code, _out, err = run(capsys, ADDRESS, "--key-file", "robot.key", "--writer", "1",
+    code, _out, err = run(capsys, ADDRESS, "--key-file", "robot.key", "--writer", "7",
                           "--status", "idle", "--backend", "loopback", "--loopback-state", state,
                           "--loopback-key", "site.key")  # fmt: skip
     assert code == 2

@@ -111,10 +111,10 @@ def test_fake_counts_and_ages_with_its_clock():
         assert scanner.feed("AA", OURS, rssi=-50) == Sighting(12, STATE, -50, 100.0, "AA")
         assert scanner.feed("PHONE", {0x004C: b"\x02\x15"}) is None
         assert scanner.feed("BROKEN", {0xFFFF: b"\x0a\x01\x03\x0c"}) is None
-        assert scanner.feed("SHORT", {0xFFFF: b"\x01"}) is None
+        assert scanner.feed("SHORT", {0xFFFF: b"\x01"}) is None  # 0xFFFF, another length
     assert not scanner.running
-    assert (scanner.accepted, scanner.foreign, scanner.malformed) == (1, 1, 2)
-    assert scanner.errors == {"UrgencyRangeError": 1, "PayloadLengthError": 1}
+    assert (scanner.accepted, scanner.foreign, scanner.malformed) == (1, 2, 1)
+    assert scanner.errors == {"UrgencyRangeError": 1}
     clock.now = 101.5
     assert list(scanner.states()) == [12]
     clock.now = 102.5

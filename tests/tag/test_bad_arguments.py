@@ -40,13 +40,14 @@ from swarmtag.tag import (
     apply_change,
     decode,
     decode_manufacturer_data,
+    derive_robot_key,
     derive_role_key,
     encode,
     encode_manufacturer_data,
 )
 
 KEY = bytes(range(16))  # the site key
-ROBOT_KEY = derive_role_key(KEY, Role.ROBOT)
+ROBOT_KEY = derive_robot_key(KEY, 7)  # robot 7's
 OPERATOR_KEY = derive_role_key(KEY, Role.OPERATOR)
 STATE = TagState(urgency=7, status=TagStatus.AWAITING_PICKUP, destination=3, marker=12)
 
@@ -151,8 +152,8 @@ def test_records_beyond_capacity_are_refused():
         ({"role": True}, "role: True"),
         ({"key": "a text key of 16+"}, "key: .*got str"),
         ({"key": None}, "key: .*got NoneType"),
-        ({"key": b"short"}, "key: a role key is 32 bytes, got 5"),
-        ({"key": KEY}, r"key: a role key is 32 bytes, got 16; get one with derive_role_key"),
+        ({"key": b"short"}, "key: a writer's key is 32 bytes, got 5"),
+        ({"key": KEY}, r"key: a writer's key is 32 bytes, got 16; get one with derive_robot_key"),
         ({"key": 16}, "key: .*got int"),
         ({"writer": -1}, "writer: -1"),
         ({"writer": 0x10000}, "writer: 65536"),

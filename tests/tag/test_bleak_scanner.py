@@ -84,16 +84,22 @@ def test_foreign_devices_are_ignored():
 
 def test_malformed_ours_are_counted_not_crashed():
     scanner = BleakTagScanner(clock=Clock())
-    for data in (b"\x0a\x01\x03\x0c", b"\x07\x07\x03\x0c", b"\x07", b"\x07\x01\x03\x0c\x00"):
+    for data in (b"\x0a\x01\x03\x0c", b"\x07\x07\x03\x0c"):
         hear(scanner, "BROKEN", {0xFFFF: data})
     hear(scanner, "GOOD", OURS)
     assert list(scanner.states()) == [12]
-    assert scanner.malformed == 4
-    assert scanner.errors == {
-        "UrgencyRangeError": 1,
-        "UnknownStatusError": 1,
-        "PayloadLengthError": 2,
-    }
+    assert scanner.malformed == 2
+    assert scanner.errors == {"UrgencyRangeError": 1, "UnknownStatusError": 1}
+
+
+def test_other_devices_under_0xffff_are_foreign_not_malformed():
+    """0xFFFF is the test/internal-use id: battery monitors and beacons use it too (issue 35)."""
+    scanner = BleakTagScanner(clock=Clock())
+    for data in (b"", b"\x07", b"\x07\x01\x03", b"\x07\x01\x03\x0c\x00", bytes(20)):
+        hear(scanner, "MONITOR", {0xFFFF: data})
+    hear(scanner, "GOOD", OURS)
+    assert list(scanner.states()) == [12]
+    assert (scanner.accepted, scanner.foreign, scanner.malformed) == (1, 5, 0)
 
 
 def test_updates_are_seen_when_adverts_repeat_or_are_dropped():

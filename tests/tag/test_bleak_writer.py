@@ -51,8 +51,10 @@ from swarmtag.tag import (
     TagState,
     TagStatus,
     WriteSigner,
+    derive_robot_key,
     derive_role_key,
     write_key_file,
+    write_robot_key_file,
     write_role_key_file,
 )
 from swarmtag.tag.backends.bleak_writer import (
@@ -65,7 +67,7 @@ from swarmtag.tag.counter import CounterFile
 
 GATTProtocolError = getattr(bleak.exc, "BleakGATTProtocolError", None)
 SITE = bytes(range(40, 72))
-ROBOT_KEY = derive_role_key(SITE, Role.ROBOT)
+ROBOT_KEY = derive_robot_key(SITE, 7)  # robot 7's own key
 OPERATOR_KEY = derive_role_key(SITE, Role.OPERATOR)
 ADDRESS = "C4:7F:0E:12:34:56"
 WAITING = TagState(urgency=6, status=TagStatus.AWAITING_PICKUP, destination=2, marker=12)
@@ -143,7 +145,7 @@ def counters(tmp_path):
 def writer_for(tag, counters, *, role=Role.ROBOT, writer=7, timeout=2.0, adapter=None, **client):
     FakeClient.made.clear()
     factory = functools.partial(FakeClient, tag=tag, counters=counters, **client)
-    key = ROBOT_KEY if role is Role.ROBOT else OPERATOR_KEY
+    key = derive_robot_key(SITE, writer) if role is Role.ROBOT else OPERATOR_KEY
     return BleakTagWriter(
         writer=writer,
         role=role,
@@ -415,25 +417,30 @@ def test_the_adapter_reaches_bleak_the_way_it_takes_it(counters):
     assert client.address == ADDRESS
 
 
-def test_from_key_file_takes_the_role_from_the_file(tmp_path, counters):
-    path = write_role_key_file(tmp_path / "robot.key", Role.ROBOT, ROBOT_KEY)
-    writer = BleakTagWriter.from_key_file(path, writer=3, counters=counters)
-    assert (writer.role, writer.writer) == (Role.ROBOT, 3)
-    assert BleakTagWriter.from_key_file(path, writer=3, counters=counters, role=Role.ROBOT)
+def test_from_key_file_takes_the_role_and_writer_from_the_file(tmp_path, counters):
+    path = write_robot_key_file(tmp_path / "robot.key", 7, ROBOT_KEY)
+    writer = BleakTagWriter.from_key_file(path, counters=counters)
+    assert (writer.role, writer.writer) == (Role.ROBOT, 7)
+    assert BleakTagWriter.from_key_file(path, writer=7, counters=counters, role=Role.ROBOT)
     with pytest.raises(ConfigError, match=r"operator does not match the key file .* robot key"):
-        BleakTagWriter.from_key_file(path, writer=3, counters=counters, role=Role.OPERATOR)
+        BleakTagWriter.from_key_file(path, counters=counters, role=Role.OPERATOR)
+    with pytest.raises(ConfigError, match=r"writer 3 does not match the key file .* robot 7's"):
+        BleakTagWriter.from_key_file(path, writer=3, counters=counters)
+    operator = write_role_key_file(tmp_path / "operator.key", Role.OPERATOR, OPERATOR_KEY)
+    assert BleakTagWriter.from_key_file(operator, writer=3, counters=counters).writer == 3
+    with pytest.raises(ConfigError, match=r"operator key, shared by its writers: give .*--writer"):
+        BleakTagWriter.from_key_file(operator, counters=counters)
     site = write_key_file(tmp_path / "site.key", SITE)
-    with pytest.raises(KeyFileError, match="is the site key file, not a role key file"):
+    with pytest.raises(KeyFileError, match="is the site key file, not a writer's key file"):
         BleakTagWriter.from_key_file(site, writer=3, counters=counters)
 
 
 def test_a_robot_key_file_cannot_make_an_operator_write(tmp_path, counters):
-    """The issue's line, through the whole writer: a robot's machine holds only the robot key."""
-    path = write_role_key_file(tmp_path / "robot.key", Role.ROBOT, ROBOT_KEY)
+    """The issue's line, through the whole writer: a robot's machine holds only its own key."""
+    path = write_robot_key_file(tmp_path / "robot.key", 7, ROBOT_KEY)
     tag = new_tag()
     writer = BleakTagWriter.from_key_file(
         path,
-        writer=3,
         counters=counters,
         client_factory=functools.partial(FakeClient, tag=tag, counters=counters),
     )
@@ -447,7 +454,7 @@ def test_a_robot_key_file_cannot_make_an_operator_write(tmp_path, counters):
     [
         ({"writer": 70000}, "writer"),
         ({"role": 3}, "role"),
-        ({"key": SITE[:16]}, "role key is 32 bytes"),
+        ({"key": SITE[:16]}, "key is 32 bytes"),
         ({"timeout": 0.0}, "timeout"),
         ({"timeout": float("nan")}, "timeout"),
         ({"adapter": "usb0"}, "not a BlueZ adapter name"),

@@ -34,6 +34,7 @@ from swarmtag.tag import (
     Role,
     TagStatus,
     WriteSigner,
+    derive_robot_key,
     derive_role_key,
 )
 from swarmtag.tag.backends.bless import BlessTagServer, dbus_error, explain_server_error
@@ -43,7 +44,7 @@ from tests.tag.fake_bluez import ADVERTISEMENT, CHARACTERISTIC, DAEMON, att_code
 
 SITE_KEY = bytes(range(32))
 MARKER = 12
-ROBOT = WriteSigner(writer=7, role=Role.ROBOT, key=derive_role_key(SITE_KEY, Role.ROBOT))
+ROBOT = WriteSigner(writer=7, role=Role.ROBOT, key=derive_robot_key(SITE_KEY, 7))
 OPERATOR = WriteSigner(writer=1, role=Role.OPERATOR, key=derive_role_key(SITE_KEY, Role.OPERATOR))
 
 

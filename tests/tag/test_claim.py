@@ -21,6 +21,7 @@ from swarmtag.tag import (
     TagState,
     TagStatus,
     WriteSigner,
+    derive_robot_key,
     derive_role_key,
 )
 from swarmtag.tag.claim import (
@@ -33,14 +34,18 @@ from swarmtag.tag.claim import (
 from swarmtag.tag.write import authenticated, mac
 
 SITE = bytes(range(16))
-GOLDEN = [
+GOLDEN = [  # robot 7's claims on tag 12 for 30 s, signed with robot 7's own key (HKDF by hand)
+    "02010700000000000c1e00008d2a7370a36399b5",
+    "02010700010000000c1e00007c360f1b3e712b34",
+]
+LEGACY_GOLDEN = [  # the same claims under the legacy shared robot key
     "02010700000000000c1e0000c3f5508afd58f434",
     "02010700010000000c1e00000d2b3b96fb5106c1",
 ]
 
 
 def robot(writer: int = 7) -> WriteSigner:
-    return WriteSigner(writer=writer, role=Role.ROBOT, key=derive_role_key(SITE, Role.ROBOT))
+    return WriteSigner(writer=writer, role=Role.ROBOT, key=derive_robot_key(SITE, writer))
 
 
 def tag(status: TagStatus = TagStatus.AWAITING_PICKUP) -> TagModel:
@@ -51,6 +56,12 @@ def tag(status: TagStatus = TagStatus.AWAITING_PICKUP) -> TagModel:
 def test_golden_vectors():
     signer = robot()
     assert [sign_claim(signer, 12, 30).hex() for _ in GOLDEN] == GOLDEN
+    shared = WriteSigner(writer=7, role=Role.ROBOT, key=derive_role_key(SITE, Role.ROBOT))
+    assert [sign_claim(shared, 12, 30).hex() for _ in LEGACY_GOLDEN] == LEGACY_GOLDEN
+    for message in map(bytes.fromhex, LEGACY_GOLDEN):
+        with pytest.raises(ForgedWrite):
+            verify_claim(message, SITE)
+        assert verify_claim(message, SITE, shared_robot_key=True).writer == 7
     assert encode_claim_data(Claim(holder=7, until=112.0), now=100.0).hex() == "0107000c"
     assert decode_claim_data(bytes.fromhex("0107000c"), now=100.0) == Claim(7, 112.0)
 
@@ -103,7 +114,8 @@ def test_bad_claims_are_refused_and_change_nothing(change, error, words):
 def _resigned(message: bytes, index: int, value: int) -> bytes:
     signed = bytearray(message[:12])
     signed[index] = value
-    return bytes(signed) + mac(derive_role_key(SITE, Role.ROBOT), bytes(signed))
+    writer = int.from_bytes(signed[2:4], "little")
+    return bytes(signed) + mac(derive_robot_key(SITE, writer), bytes(signed))
 
 
 def test_an_operator_may_not_claim():

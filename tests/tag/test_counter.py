@@ -228,3 +228,108 @@ def test_writer_ids_are_checked(tmp_path, writer):
     with pytest.raises(FieldRangeError, match="writer"):
         CounterFile(tmp_path / "w.counters").reserve(writer)
     assert list(tmp_path.iterdir()) == []
+
+
+# --- a full table: 65,536 writers, parsed in linear time, read once per write (issue 35) ---------
+
+
+def _full_table() -> dict[int, int]:
+    return {writer: (writer * 2_654_435_761) % MAX_COUNTER for writer in range(0x10000)}
+
+
+def test_a_table_of_all_65536_writers_round_trips_and_reserves(tmp_path):
+    table = _full_table()
+    data = format_counters(table)
+    assert parse_counters(data) == table
+    path = tmp_path / "w.counters"
+    path.write_bytes(data)
+    counters = CounterFile(path)
+    assert counters.check() == table
+    assert [counters.reserve(writer) for writer in (0, 7, 65535, 7)] == [
+        table[0] + 1,
+        table[7] + 1,
+        table[65535] + 1,
+        table[7] + 2,
+    ]
+    expected = {**table, 0: table[0] + 1, 7: table[7] + 2, 65535: table[65535] + 1}
+    assert parse_counters(path.read_bytes()) == expected
+    assert CounterFile(path).check() == expected  # another process reads the same
+
+
+def test_the_largest_table_fits_the_file_limit():
+    data = format_counters(dict.fromkeys(range(0x10000), MAX_COUNTER))
+    assert len(data) < counter_module._MAX_FILE_BYTES
+    assert parse_counters(data)[65535] == MAX_COUNTER
+
+
+@pytest.mark.parametrize(
+    ("body", "words"),
+    [
+        (b"0 1\n1 2\n1 3\n", "line 4: writer ids are not in increasing order"),
+        (b"0 1\n2 2\n1 3\n", "line 4: writer ids are not in increasing order"),
+        (b"0 1\n65536 2\n", "line 3 is not '<writer id> <counter>' in range"),
+        (b"0 1\n1 4294967296\n", "line 3 is not '<writer id> <counter>' in range"),
+        (b"0 1\n1 x\n", "line 3 is not '<writer id> <counter>' in range"),
+    ],
+)
+def test_a_bad_line_is_named_in_a_long_file_too(body, words):
+    data = format_counters(dict.fromkeys(range(100, 60_100), 5)).replace(b"\n100 5\n", b"\n")
+    head = data[: data.index(b"\n") + 1]
+    with pytest.raises(ValueError, match=words):
+        parse_counters(head + body + data[len(head) :])
+
+
+def test_crlf_line_ends_are_read_as_before():
+    assert parse_counters(b"swarmtag-writer-counters-v1\n7 41\r\n9 1\r\n") == {7: 41, 9: 1}
+
+
+def _counting_parses(monkeypatch) -> list[int]:
+    """Count the reads of counter files (each read is parsed once); treat new files as settled."""
+    calls: list[int] = []
+    real = counter_module.parse_counters
+
+    def counted(data: bytes) -> dict[int, int]:
+        calls.append(len(data))
+        return real(data)
+
+    monkeypatch.setattr(counter_module, "parse_counters", counted)
+    monkeypatch.setattr(counter_module, "_SETTLED_NS", 0)
+    return calls
+
+
+def test_a_write_reads_the_counter_file_once(tmp_path, monkeypatch):
+    """check (before the radio), check again (the writer), reserve: one read of the file."""
+    path = tmp_path / "w.counters"
+    path.write_bytes(format_counters(_full_table()))
+    calls = _counting_parses(monkeypatch)
+    counters = CounterFile(path)
+    counters.check()
+    counters.check()
+    assert counters.reserve(7) == _full_table()[7] + 1
+    assert len(calls) == 1
+    assert counters.reserve(7) == _full_table()[7] + 2  # the file it wrote itself: not read
+    assert len(calls) == 1
+
+
+def test_a_file_another_process_replaced_is_read_again(tmp_path, monkeypatch):
+    path = tmp_path / "w.counters"
+    path.write_bytes(format_counters({7: 10}))
+    calls = _counting_parses(monkeypatch)
+    ours = CounterFile(path)
+    ours.check()
+    assert CounterFile(path).reserve(7) == 11  # another process, between our check and reserve
+    assert ours.reserve(7) == 12
+    assert len(calls) == 3
+
+
+def test_a_file_changed_just_before_it_was_read_is_not_trusted_again(tmp_path, monkeypatch):
+    """Within 2 s of a change, another file could carry the same identity: read again."""
+    path = tmp_path / "w.counters"
+    path.write_bytes(format_counters({7: 10}))
+    calls: list[int] = []
+    real = counter_module.parse_counters
+    monkeypatch.setattr(counter_module, "parse_counters", lambda d: calls.append(1) or real(d))
+    counters = CounterFile(path)
+    counters.check()
+    assert counters.reserve(7) == 11
+    assert len(calls) == 2  # the file was new: read again under the lock

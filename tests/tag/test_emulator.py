@@ -14,20 +14,21 @@ from swarmtag.tag import (
     TagStatus,
     Write,
     WriteSigner,
+    derive_robot_key,
     derive_role_key,
     sign,
 )
 from swarmtag.tag.emulator import ACCEPTED, SoftwareTag, WriteOutcome, describe_outcome
 
 SITE_KEY = bytes.fromhex("00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff")
-ROBOT_KEY = derive_role_key(SITE_KEY, Role.ROBOT)
+ROBOT_KEY = derive_robot_key(SITE_KEY, 7)  # robot 7's own key
 OPERATOR_KEY = derive_role_key(SITE_KEY, Role.OPERATOR)
 MARKER = 12
 START = TagState(urgency=7, status=TagStatus.AWAITING_PICKUP, destination=3, marker=MARKER)
 
 
 def robot(writer: int = 7) -> WriteSigner:
-    return WriteSigner(writer=writer, role=Role.ROBOT, key=ROBOT_KEY)
+    return WriteSigner(writer=writer, role=Role.ROBOT, key=derive_robot_key(SITE_KEY, writer))
 
 
 def operator(writer: int = 1) -> WriteSigner:

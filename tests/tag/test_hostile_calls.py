@@ -32,18 +32,22 @@ from swarmtag.tag import (
     TagState,
     TagStatus,
     Write,
+    WriterKey,
     WriteSigner,
     apply_change,
     decode,
     decode_manufacturer_data,
+    derive_robot_key,
     derive_role_key,
     encode,
     encode_manufacturer_data,
     read_key_file,
     read_role_key_file,
+    read_writer_key_file,
     sign,
     verify,
     write_key_file,
+    write_robot_key_file,
     write_role_key_file,
 )
 from swarmtag.tag.claim import Claim
@@ -66,7 +70,15 @@ records = st.builds(
     TagRecord,
     state=tag_states,
     counters=st.dictionaries(st.integers(0, 0xFFFF), st.integers(0, 2**32 - 1), max_size=3),
+    shared_robot_key=st.booleans(),
 )
+
+
+def _writer_key(write: Write) -> bytes:
+    """The key a tag checks ``write`` under: the robot's own, or the operator key."""
+    return (
+        derive_robot_key(KEY, write.writer) if write.role is Role.ROBOT else ROLE_KEYS[write.role]
+    )
 
 
 def _stored(record: TagRecord) -> MemoryStore:
@@ -102,7 +114,7 @@ hostile = st.one_of(
     changes,
     writes,
     records,
-    writes.map(lambda write: sign(write, ROLE_KEYS[write.role])),  # authentic 20-byte writes
+    writes.map(lambda write: sign(write, _writer_key(write))),  # authentic 20-byte writes
     tag_states.map(encode),  # valid advertisements
     tag_states.map(encode_manufacturer_data),
     st.builds(MemoryStore),
@@ -192,11 +204,22 @@ TARGETS: dict[str, tuple[Callable[..., object], int, type | tuple[type, ...]]] =
     ),
     "TagModel.boot": (lambda k, s: TagModel.boot(site_key=k, store=s), 2, TagModel),
     "TagModel.provision": (
-        lambda st_, k, s: TagModel.provision(st_, site_key=k, store=s),
-        3,
+        lambda st_, k, s, b: TagModel.provision(st_, site_key=k, store=s, shared_robot_key=b),
+        4,
         TagModel,
     ),
-    "TagRecord": (lambda s, c: TagRecord(state=s, counters=c), 2, TagRecord),
+    "TagModel.set_shared_robot_key": (
+        lambda b: TagModel.provision(START, site_key=KEY, store=MemoryStore()).set_shared_robot_key(
+            b
+        ),
+        1,
+        type(None),
+    ),
+    "TagRecord": (
+        lambda s, c, lifter, b: TagRecord(state=s, counters=c, lifter=lifter, shared_robot_key=b),
+        4,
+        TagRecord,
+    ),
     "TagRecord.from_bytes": (TagRecord.from_bytes, 1, TagRecord),
     "TagState": (
         lambda u, s, d, m: TagState(urgency=u, status=s, destination=d, marker=m),
@@ -216,16 +239,25 @@ TARGETS: dict[str, tuple[Callable[..., object], int, type | tuple[type, ...]]] =
         WriteSigner,
     ),
     "WriteSigner.sign": (_signer_sign, 2, bytes),
+    "WriterKey": (lambda r, k, w: WriterKey(role=r, key=k, writer=w), 3, WriterKey),
+    "WriterKey.writer_id": (
+        lambda w, p: WriterKey(role=Role.ROBOT, key=bytes(32), writer=7).writer_id(w, p),
+        2,
+        int,
+    ),
     "apply_change": (apply_change, 3, TagState),
     "decode": (decode, 1, TagState),
     "decode_manufacturer_data": (decode_manufacturer_data, 1, TagState),
     "encode": (encode, 1, bytes),
     "derive_role_key": (derive_role_key, 2, bytes),
+    "derive_robot_key": (derive_robot_key, 2, bytes),
     "encode_manufacturer_data": (encode_manufacturer_data, 1, dict),
     "read_key_file": (_in_scratch(read_key_file), 1, bytes),
     "write_key_file": (_in_scratch(write_key_file), 2, Path),
     "read_role_key_file": (_in_scratch(read_role_key_file), 1, tuple),
     "write_role_key_file": (_in_scratch(write_role_key_file), 3, Path),
+    "read_writer_key_file": (_in_scratch(read_writer_key_file), 1, WriterKey),
+    "write_robot_key_file": (_in_scratch(write_robot_key_file), 3, Path),
     "sign": (sign, 2, bytes),
     "verify": (verify, 2, Write),
 }

@@ -27,6 +27,7 @@ from swarmtag.tag import keys as keys_module
 from swarmtag.tag.keys import (
     HKDF_SALT,
     KEY_FILE_HEADER,
+    ROBOT_KEY_FILE_HEADER,
     ROLE_KEY_FILE_HEADERS,
     ROLE_KEY_INFO,
     SITE_KEY_LENGTH,
@@ -320,9 +321,9 @@ def test_the_site_key_file_is_refused_where_a_role_key_is_expected(tmp_path):
     with pytest.raises(KeyFileError) as caught:
         read_role_key_file(site)
     assert str(caught.value) == (
-        f"key file {site} is the site key file, not a role key file: a writer holds only its "
-        f"role's key; derive one with 'swarmtag tag keygen --role robot|operator --from {site} "
-        "--out ROLE.key'"
+        f"key file {site} is the site key file, not a writer's key file: a writer holds only its "
+        f"own key; derive one with 'swarmtag tag keygen --role robot --writer ID --from {site} "
+        "--out FILE' (or --role operator)"
     )
 
 
@@ -364,9 +365,11 @@ def test_bad_role_key_content_is_one_message_without_the_content(tmp_path, data)
         read_role_key_file(path)
     message = str(caught.value)
     assert message == (
-        f"key file {path} is not a swarmtag role key file: expected the line "
-        "'swarmtag-robot-key-v1' or 'swarmtag-operator-key-v1', then a line of 64 hex digits "
-        "(derive one with 'swarmtag tag keygen --role robot|operator --from SITE.key --out FILE')"
+        f"key file {path} is not a swarmtag writer's key file: expected the line "
+        "'swarmtag-robot-writer-key-v1', a writer id and 64 hex digits, or "
+        "'swarmtag-operator-key-v1' (or 'swarmtag-robot-key-v1') and 64 hex digits (derive one "
+        "with 'swarmtag tag keygen --role robot --writer ID --from SITE.key --out FILE' or "
+        "'--role operator --from SITE.key --out FILE')"
     )
     assert KEY.hex()[:16] not in message
 
@@ -416,8 +419,13 @@ def test_hardware_doc_states_the_derivation_uuids_codes_and_vectors():
         vectors.KEY.hex(),
         prk,
         vectors.ROBOT_KEY.hex(),
+        vectors.ROBOT7_KEY.hex(),
+        vectors.ROBOT_INFO.decode(),
+        vectors.ROBOT_INFO.hex(),
         vectors.OPERATOR_KEY.hex(),
         f"`{vectors.ROBOT_LIFT[:12].hex()}` `{vectors.ROBOT_LIFT[12:].hex()}`",
+        f"`{vectors.LEGACY_ROBOT_LIFT[:12].hex()}` `{vectors.LEGACY_ROBOT_LIFT[12:].hex()}`",
+        ROBOT_KEY_FILE_HEADER,
         f"`{vectors.OPERATOR_WRITE[:12].hex()}` `{vectors.OPERATOR_WRITE[12:].hex()}`",
         KEY_FILE_HEADER,
         *ROLE_KEY_FILE_HEADERS.values(),

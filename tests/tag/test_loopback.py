@@ -22,7 +22,7 @@ from swarmtag.tag import (
     TagState,
     TagStatus,
     WriteSigner,
-    derive_role_key,
+    derive_robot_key,
 )
 from swarmtag.tag.backends import loopback
 from swarmtag.tag.backends.bleak_writer import att_error_code
@@ -39,7 +39,7 @@ def client() -> LoopbackClient:
 
 
 def robot() -> WriteSigner:
-    return WriteSigner(writer=3, role=Role.ROBOT, key=derive_role_key(SITE, Role.ROBOT))
+    return WriteSigner(writer=3, role=Role.ROBOT, key=derive_robot_key(SITE, 3))
 
 
 def test_state_reads_as_the_four_field_bytes_and_writes_apply():

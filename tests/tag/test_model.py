@@ -24,13 +24,15 @@ from swarmtag.tag import (
     TagStatus,
     Write,
     WriteSigner,
+    derive_robot_key,
     derive_role_key,
     sign,
 )
 from tests.strategies import bytes_values, changes, statuses, urgencies
 
 KEY = b"site-key-for-tests-0123456789abc"  # the site key: what a tag holds
-ROBOT_KEY = derive_role_key(KEY, Role.ROBOT)  # what a robot holds
+ROBOT_KEY = derive_robot_key(KEY, 1)  # what robot 1 holds
+SHARED_ROBOT_KEY = derive_role_key(KEY, Role.ROBOT)  # the legacy key of all robots
 OPERATOR_KEY = derive_role_key(KEY, Role.OPERATOR)  # what an operator or the WMS holds
 MARKER = 12
 ROBOT_MOVES = {
@@ -104,7 +106,7 @@ def test_counters_are_per_writer():
 
 def test_counter_survives_power_cycle_so_replay_stays_refused():
     tag, store = _provision()
-    robot = WriteSigner(writer=3, role=Role.ROBOT, key=ROBOT_KEY)
+    robot = WriteSigner(writer=3, role=Role.ROBOT, key=derive_robot_key(KEY, 3))
     lift = robot.sign(MARKER, Change(status=TagStatus.PICKED_UP))
     tag.apply(lift)
     operator = WriteSigner(writer=200, role=Role.OPERATOR, key=OPERATOR_KEY)
@@ -160,7 +162,10 @@ class TagLifecycle(RuleBasedStateMachine):
         )
         self.tag = TagModel.provision(self.expected, site_key=KEY, store=self.store)
         self.counters: dict[int, int] = {}
-        self.robots = [WriteSigner(writer=w, role=Role.ROBOT, key=ROBOT_KEY) for w in (1, 2)]
+        self.lifter: int | None = None  # set by a robot's lift, kept while PICKED_UP
+        self.robots = [
+            WriteSigner(writer=w, role=Role.ROBOT, key=derive_robot_key(KEY, w)) for w in (1, 2)
+        ]
         self.operator = WriteSigner(writer=100, role=Role.OPERATOR, key=OPERATOR_KEY)
         self.seen: set[bytes] = set()
 
@@ -189,13 +194,17 @@ class TagLifecycle(RuleBasedStateMachine):
             else change.destination,
             marker=MARKER,
         )
+        if new.status is not TagStatus.PICKED_UP or self.expected.status is not new.status:
+            self.lifter = None  # an operator's move overrides (and forgets) any lifter
         return self._accepted(message, 100, self.operator.counter, new)
 
     @rule(robot=st.sampled_from([0, 1]), status=statuses)
     def robot_status_write(self, robot, status):
         signer = self.robots[robot]
         message = signer.sign(MARKER, Change(status=status))
-        if (self.expected.status, status) in ROBOT_MOVES:
+        release = self.expected.status is TagStatus.PICKED_UP
+        bound = release and self.lifter not in (None, signer.writer)
+        if (self.expected.status, status) in ROBOT_MOVES and not bound:
             new = TagState(
                 urgency=self.expected.urgency,
                 status=status,
@@ -203,8 +212,20 @@ class TagLifecycle(RuleBasedStateMachine):
                 marker=MARKER,
             )
             self._accepted(message, signer.writer, signer.counter, new)
+            self.lifter = None if release else signer.writer
         else:
             self._refused(message, IllegalTransition)
+
+    @rule(robot=st.sampled_from([0, 1]), status=statuses)
+    def robot_signs_as_the_other_robot(self, robot, status):
+        """Robot 1's key with robot 2's writer id (and the other way round) is forged."""
+        thief = WriteSigner(
+            writer=self.robots[1 - robot].writer,
+            role=Role.ROBOT,
+            key=self.robots[robot].key,
+            counter=10**6,
+        )
+        self._refused(thief.sign(MARKER, Change(status=status)), ForgedWrite)
 
     @rule(robot=st.sampled_from([0, 1]), urgency=urgencies)
     def robot_changes_urgency(self, robot, urgency):
@@ -229,8 +250,14 @@ class TagLifecycle(RuleBasedStateMachine):
 
     @rule(writer=st.sampled_from([1, 2, 100]), change=changes)
     def robot_key_signs_as_operator(self, writer, change):
-        impostor = WriteSigner(writer=writer, role=Role.OPERATOR, key=ROBOT_KEY, counter=10**6)
-        self._refused(impostor.sign(MARKER, change), ForgedWrite)
+        for key in (ROBOT_KEY, SHARED_ROBOT_KEY):
+            impostor = WriteSigner(writer=writer, role=Role.OPERATOR, key=key, counter=10**6)
+            self._refused(impostor.sign(MARKER, change), ForgedWrite)
+
+    @rule(writer=st.sampled_from([1, 2]), status=statuses)
+    def shared_robot_key_on_a_new_tag(self, writer, status):
+        legacy = WriteSigner(writer=writer, role=Role.ROBOT, key=SHARED_ROBOT_KEY, counter=10**6)
+        self._refused(legacy.sign(MARKER, Change(status=status)), ForgedWrite)
 
     @rule(change=changes, other=bytes_values.filter(lambda m: m != MARKER))
     def other_tag(self, change, other):
@@ -244,12 +271,14 @@ class TagLifecycle(RuleBasedStateMachine):
     def tag_matches_model(self):
         assert self.tag.state == self.expected
         assert dict(self.tag.counters) == self.counters
+        assert self.tag.lifter == self.lifter
 
     @invariant()
     def persisted_matches_memory(self):
         persisted = TagModel.boot(site_key=KEY, store=self.store)
         assert persisted.state == self.tag.state
         assert persisted.counters == self.tag.counters
+        assert (persisted.lifter, persisted.shared_robot_key) == (self.tag.lifter, False)
 
 
 TestTagLifecycle = TagLifecycle.TestCase

@@ -1,7 +1,7 @@
 """A robot's key cannot produce a write that a tag accepts as an operator's (issue 11).
 
-The attacker here holds everything a compromised robot holds: its role key,
-its writer id and counter, and every write it has ever seen on the air
+The attacker here holds everything a compromised robot holds: its own robot
+key, its writer id and counter, and every write it has ever seen on the air
 (including genuine operator writes). Each trick must end in ``ForgedWrite``
 with the tag exactly as it was: state, counters and persisted record.
 """
@@ -25,6 +25,7 @@ from swarmtag.tag import (
     TagStatus,
     Write,
     WriteSigner,
+    derive_robot_key,
     derive_role_key,
     sign,
 )
@@ -32,10 +33,10 @@ from swarmtag.tag.keys import HKDF_SALT, ROLE_KEY_INFO, hkdf_sha256
 from tests.strategies import changes
 
 SITE_KEY = bytes.fromhex("8f1e2d3c4b5a69788796a5b4c3d2e1f00f1e2d3c4b5a69788796a5b4c3d2e1f0")
-ROBOT_KEY = derive_role_key(SITE_KEY, Role.ROBOT)  # all the attacker has
+ROBOT_ID, OPERATOR_ID = 3, 0xFFFE
+ROBOT_KEY = derive_robot_key(SITE_KEY, ROBOT_ID)  # all the attacker has
 OPERATOR_KEY = derive_role_key(SITE_KEY, Role.OPERATOR)  # only for the honest control writes
 MARKER = 12
-ROBOT_ID, OPERATOR_ID = 3, 0xFFFE
 URGENT = Change(urgency=0, destination=7)
 
 

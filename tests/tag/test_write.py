@@ -1,7 +1,7 @@
-"""The 20-byte authenticated write format (SPEC §2.3), signed with role keys.
+"""The 20-byte authenticated write format (SPEC §2.3), signed with writer keys.
 
-Every expected byte string below is computed *outside* swarmtag: the role
-keys by ``_hkdf_rfc5869`` (a transcription of RFC 5869 §2.2-2.3, checked
+Every expected byte string below is computed *outside* swarmtag: the robot
+and role keys by ``_hkdf_rfc5869`` (a transcription of RFC 5869 §2.2-2.3, checked
 against the RFC's own test vectors in ``test_independent_hkdf_matches_rfc_5869``)
 and the MACs by ``hmac.new(role_key, signed, sha256).digest()[:8]``. The
 literal hex values were printed once from those two functions and pinned, so
@@ -25,6 +25,7 @@ from swarmtag.tag import (
     TagStatus,
     Write,
     WriteSigner,
+    derive_robot_key,
     derive_role_key,
     sign,
     verify,
@@ -78,13 +79,27 @@ RFC_5869_CASES = [
 # The derivation parameters, as docs/hardware.md states them for the firmware.
 SALT = b"swarmtag hkdf salt v1"
 INFO = {
-    Role.ROBOT: b"swarmtag write key v1 robot",
+    Role.ROBOT: b"swarmtag write key v1 robot",  # the legacy shared robot key
     Role.OPERATOR: b"swarmtag write key v1 operator",
 }
+ROBOT_INFO = b"swarmtag writer key v1 robot"  # + the writer id, uint16 little-endian
 # _hkdf_rfc5869(KEY, SALT, INFO[role], 32), printed once and pinned:
 ROBOT_KEY = bytes.fromhex("adccd32da6e599542c68b7c6666b6039b2a4a651864f9a9938e9e4f18858edd3")
 OPERATOR_KEY = bytes.fromhex("4d047418604c21257e0b562d3a705e382c6c27efbbdfc1f616a34b080d865b1b")
 ROLE_KEYS = {Role.ROBOT: ROBOT_KEY, Role.OPERATOR: OPERATOR_KEY}
+# _hkdf_rfc5869(KEY, SALT, ROBOT_INFO + bytes([7, 0]), 32), printed once and pinned:
+ROBOT7_KEY = bytes.fromhex("b896d9da3aec6f70a272c3ee2143f916e43fdb13593237feae8e62738c257db9")
+
+
+def _robot_key(writer: int) -> bytes:
+    """Robot ``writer``'s key, computed here independently of swarmtag."""
+    return _hkdf_rfc5869(KEY, SALT, ROBOT_INFO + writer.to_bytes(2, "little"), 32)
+
+
+def _key_of(signed: bytes) -> bytes:
+    """The key a tag checks ``signed`` under: the robot's own, or the operator key."""
+    role = Role(signed[1] & 0x03)
+    return _robot_key(int.from_bytes(signed[2:4], "little")) if role is Role.ROBOT else OPERATOR_KEY
 
 
 def _mac(signed: bytes, role_key: bytes = ROBOT_KEY) -> bytes:
@@ -104,8 +119,10 @@ ROBOT_LIFT_SIGNED = bytes(
         0x00,  # destination (absent)
     ]
 )  # fmt: skip
-# ROBOT_LIFT_SIGNED + _mac(ROBOT_LIFT_SIGNED, ROBOT_KEY), printed once and pinned:
-ROBOT_LIFT = bytes.fromhex("01210700010000000c0002006142ad77e552a206")
+# ROBOT_LIFT_SIGNED + _mac(ROBOT_LIFT_SIGNED, ROBOT7_KEY), printed once and pinned:
+ROBOT_LIFT = bytes.fromhex("01210700010000000c0002004edbe4fb3b1c5433")
+# ROBOT_LIFT_SIGNED + _mac(ROBOT_LIFT_SIGNED, ROBOT_KEY): the same lift under the shared key
+LEGACY_ROBOT_LIFT = bytes.fromhex("01210700010000000c0002006142ad77e552a206")
 # An operator (writer 0x0102) sets urgency 9 and destination 3 on tag 5, counter 0x0A0B0C0D.
 OPERATOR_SIGNED = bytes([0x01, 0x52, 0x02, 0x01, 0x0D, 0x0C, 0x0B, 0x0A, 0x05, 0x09, 0x00, 0x03])
 # OPERATOR_SIGNED + _mac(OPERATOR_SIGNED, OPERATOR_KEY), printed once and pinned:
@@ -120,7 +137,9 @@ def test_independent_hkdf_matches_rfc_5869(ikm, salt, info, length, okm):
 def test_pinned_vectors_are_what_the_independent_code_computes():
     for role, key in ROLE_KEYS.items():
         assert _hkdf_rfc5869(KEY, SALT, INFO[role], 32) == key
-    assert ROBOT_LIFT_SIGNED + _mac(ROBOT_LIFT_SIGNED, ROBOT_KEY) == ROBOT_LIFT
+    assert _robot_key(7) == ROBOT7_KEY
+    assert ROBOT_LIFT_SIGNED + _mac(ROBOT_LIFT_SIGNED, ROBOT7_KEY) == ROBOT_LIFT
+    assert ROBOT_LIFT_SIGNED + _mac(ROBOT_LIFT_SIGNED, ROBOT_KEY) == LEGACY_ROBOT_LIFT
     assert OPERATOR_SIGNED + _mac(OPERATOR_SIGNED, OPERATOR_KEY) == OPERATOR_WRITE
 
 
@@ -130,14 +149,32 @@ def test_derive_role_key_golden(role):
     assert derive_role_key(memoryview(KEY), int(role)) == ROLE_KEYS[role]
 
 
+@pytest.mark.parametrize("writer", [0, 7, 0x0102, 0xFFFF])
+def test_derive_robot_key_golden(writer):
+    assert derive_robot_key(KEY, writer) == _robot_key(writer)
+    assert derive_robot_key(memoryview(KEY), writer) == _robot_key(writer)
+    assert derive_robot_key(KEY, 7) == ROBOT7_KEY
+
+
 def test_golden_robot_write():
     write = Write(
         writer=7, role=Role.ROBOT, counter=1, target=12, change=Change(status=TagStatus.PICKED_UP)
     )
-    message = sign(write, ROBOT_KEY)
+    message = sign(write, ROBOT7_KEY)
     assert message == ROBOT_LIFT
     assert len(message) == 20 == WRITE_LENGTH
     assert verify(message, KEY) == write
+    assert verify(message, KEY, shared_robot_key=True) == write
+
+
+def test_the_shared_robot_key_verifies_only_where_the_tag_accepts_it():
+    write = Write(
+        writer=7, role=Role.ROBOT, counter=1, target=12, change=Change(status=TagStatus.PICKED_UP)
+    )
+    assert sign(write, ROBOT_KEY) == LEGACY_ROBOT_LIFT
+    with pytest.raises(ForgedWrite):
+        verify(LEGACY_ROBOT_LIFT, KEY)
+    assert verify(LEGACY_ROBOT_LIFT, KEY, shared_robot_key=True) == write
 
 
 def test_golden_operator_write():
@@ -161,7 +198,8 @@ def test_golden_operator_write():
 )
 def test_sign_verify_round_trip(writer, role, counter, target, change):
     write = Write(writer=writer, role=role, counter=counter, target=target, change=change)
-    message = sign(write, ROLE_KEYS[role])
+    key = derive_robot_key(KEY, writer) if role is Role.ROBOT else OPERATOR_KEY
+    message = sign(write, key)
     assert len(message) <= 20
     assert verify(message, KEY) == write
 
@@ -171,7 +209,7 @@ def test_wrong_key_is_forged():
     with pytest.raises(ForgedWrite):
         verify(sign(write, OPERATOR_KEY), b"another-site-key")
     for wrong in (ROBOT_KEY, derive_role_key(b"another-site-key", Role.OPERATOR), KEY * 2):
-        with pytest.raises(ForgedWrite, match="key of the role it names"):
+        with pytest.raises(ForgedWrite, match="key of the role and writer id it names"):
             verify(sign(write, wrong), KEY)  # KEY * 2: the site key is no role key either
 
 
@@ -189,6 +227,7 @@ def test_role_bits_naming_no_role_are_forged_under_every_key(flags):
     for key in (
         KEY,
         ROBOT_KEY,
+        ROBOT7_KEY,
         OPERATOR_KEY,
         _hkdf_rfc5869(KEY, SALT, b"swarmtag write key v1 ", 32),
     ):
@@ -225,10 +264,9 @@ def test_wrong_length_is_malformed(length):
     ],
 )
 def test_authentic_but_malformed_writes(signed, words):
-    """MACed under the key of the role their flags name, yet not a valid write."""
-    role_key = ROLE_KEYS[Role(signed[1] & 0x03)]
+    """MACed under the key of the role and writer their bytes name, yet not a valid write."""
     with pytest.raises(MalformedWrite, match=words):
-        verify(signed + _mac(signed, role_key), KEY)
+        verify(signed + _mac(signed, _key_of(signed)), KEY)
 
 
 @pytest.mark.parametrize(
@@ -271,9 +309,9 @@ def test_verify_refuses_short_or_non_bytes_site_keys(key):
 
 
 def test_signer_counts_up_from_zero_and_keeps_its_counter():
-    signer = WriteSigner(writer=4, role=Role.ROBOT, key=ROBOT_KEY)
+    signer = WriteSigner(writer=4, role=Role.ROBOT, key=_robot_key(4))
     first = verify(signer.sign(3, Change(status=TagStatus.PICKED_UP)), KEY)
     second = verify(signer.sign(3, Change(status=TagStatus.IDLE)), KEY)
     assert (first.counter, second.counter, signer.counter) == (0, 1, 1)
-    resumed = WriteSigner(writer=4, role=Role.ROBOT, key=ROBOT_KEY, counter=signer.counter)
+    resumed = WriteSigner(writer=4, role=Role.ROBOT, key=_robot_key(4), counter=signer.counter)
     assert verify(resumed.sign(3, Change(status=TagStatus.IDLE)), KEY).counter == 2

@@ -23,7 +23,7 @@ from swarmtag.tag import (
     TagStatus,
     WriteSigner,
     decode,
-    derive_role_key,
+    derive_robot_key,
     encode,
     encode_manufacturer_data,
 )
@@ -73,7 +73,7 @@ def _writes(console: Console) -> None:
     store = MemoryStore()
     start = TagState(urgency=9, status=TagStatus.AWAITING_PICKUP, destination=0, marker=5)
     tag = TagModel.provision(start, site_key=_SITE_KEY, store=store)
-    robot_key = derive_role_key(_SITE_KEY, Role.ROBOT)  # a robot holds only its role's key
+    robot_key = derive_robot_key(_SITE_KEY, 1)  # a robot holds only its own key (writer 1)
     robot = WriteSigner(writer=1, role=Role.ROBOT, key=robot_key)
     stolen = WriteSigner(writer=1, role=Role.OPERATOR, key=robot_key)
     intruder = WriteSigner(writer=900, role=Role.OPERATOR, key=b"a phone's guessed operator key!!")

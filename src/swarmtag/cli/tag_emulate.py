@@ -13,6 +13,10 @@ the same tag (``--marker``); ``--urgency``/``--status``/``--destination``
 only set up a new tag and are refused then. If it does not exist the tag is
 provisioned there (urgency 0, IDLE, destination 0 unless given). Without
 it the tag lives in memory and forgets its counters when the command ends.
+Robots sign with their own keys (``tag keygen --role robot --writer ID``);
+``--shared-robot-key`` makes the tag also accept the legacy key shared by
+all robots (a tag booted from a state file written before per-robot keys
+accepts it until ``--no-shared-robot-key``, which is saved in the file).
 Nothing is written until the tag is on the air: then a new state file and
 the first ``--eink`` picture appear together (a radio that fails leaves
 neither); the picture is redrawn after every accepted write.
@@ -135,6 +139,7 @@ def _open_tag(
     urgency: int | None,
     status: TagStatus | None,
     destination: int | None,
+    shared_robot_key: bool | None,
 ) -> tuple[SoftwareTag, _PendingStore | None]:
     """Boot the tag from ``state_file``, or set up a new one (pending until it serves)."""
     pending = _PendingStore() if state_file is not None and not state_file.exists() else None
@@ -147,6 +152,7 @@ def _open_tag(
             urgency=urgency,
             status=status,
             destination=destination,
+            shared_robot_key=shared_robot_key,
         )
     except FieldRangeError as error:
         raise ConfigError(f"--state-file {state_file}: {error}") from None
@@ -236,7 +242,7 @@ def _summary(tag: SoftwareTag) -> str:
     required=True,
     metavar="FILE",
     type=click.Path(path_type=Path),
-    help="The site key file (swarmtag tag keygen); the tag checks writes under its role keys.",
+    help="The site key file (swarmtag tag keygen); the tag derives every writer's key from it.",
 )
 @click.option(
     "--state-file",
@@ -254,6 +260,12 @@ def _summary(tag: SoftwareTag) -> str:
 )
 @click.option(
     "--destination", type=click.IntRange(0, 255), help="Destination 0-255 of a new tag (default 0)."
+)
+@click.option(
+    "--shared-robot-key/--no-shared-robot-key",
+    default=None,
+    help="Also accept the legacy key shared by all robots, or stop accepting it (saved in "
+    "--state-file) [default: a new tag does not; a stored tag keeps its setting].",
 )
 @click.option(
     "--timeout",
@@ -283,6 +295,7 @@ def emulate_cmd(
     urgency: int | None,
     status: TagStatus | None,
     destination: int | None,
+    shared_robot_key: bool | None,
     timeout: float | None,
     eink: Path | None,
     adapter: str | None,
@@ -315,6 +328,7 @@ def emulate_cmd(
         urgency=urgency,
         status=status,
         destination=destination,
+        shared_robot_key=shared_robot_key,
     )
     server = _open_server(tag, writes, adapter)
     try:
@@ -335,6 +349,10 @@ def emulate_cmd(
         f"software tag {state.marker} ({how}{where}) on {server.name}: urgency {state.urgency}, "
         f"{state.status.name}, destination {state.destination}{stop}"
     )
+    if tag.shared_robot_key:
+        click.echo(
+            "note: this tag also accepts the legacy shared robot key (--no-shared-robot-key)"
+        )
     interrupted = _serve(server, timeout, eink)
     click.echo(_summary(tag))
     if server.failure is not None:

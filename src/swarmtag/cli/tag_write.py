@@ -1,10 +1,13 @@
 """``swarmtag tag write ADDRESS``: one authenticated write to one tag, and the tag's answer.
 
-The writer's identity comes from a role key file (``tag keygen --role``):
-its role is the file's, and ``--role`` only double-checks it (a mismatch is
-refused before anything is sent). The writer's counter is reserved in its
-counter file and saved before the write goes out (``swarmtag.tag.counter``);
-by default that file sits next to the key file (``ROLE.key.counters``).
+The writer's identity comes from its key file (``tag keygen --role``): its
+role is the file's, and ``--role`` only double-checks it; a robot key file
+names its writer id too, so ``--writer`` may be left out, and if given must
+be that id (a mismatch is refused before anything is sent). An operator key
+file (or the legacy shared robot key) needs ``--writer``. The writer's
+counter is reserved in its counter file and saved before the write goes out
+(``swarmtag.tag.counter``); by default that file sits next to the key file
+(``ROLE.key.counters``).
 
 Exit status: 0 when the tag accepted the write (the new state is printed);
 **1 when the tag refused it** (one ``swarmtag: refused:`` line with the ATT
@@ -28,7 +31,7 @@ import click
 from swarmtag._inputs import regular_file
 from swarmtag.cli._tag_options import adapter, seconds_between, status
 from swarmtag.errors import ConfigError, StateRecordError, WriteRejected
-from swarmtag.tag import Change, Role, TagState, TagStatus, read_role_key_file
+from swarmtag.tag import Change, Role, TagState, TagStatus, read_writer_key_file
 from swarmtag.tag.backends.base import check_address
 from swarmtag.tag.counter import CounterFile
 
@@ -78,10 +81,12 @@ def _shown(state: TagState) -> str:
     required=True,
     metavar="ROLE.key",
     type=click.Path(dir_okay=False, path_type=Path),
-    help="The writer's role key file (swarmtag tag keygen --role ... --from SITE.key).",
+    help="The writer's key file (swarmtag tag keygen --role ... --from SITE.key).",
 )
 @click.option(
-    "--writer", required=True, type=click.IntRange(0, 0xFFFF), help="This writer's id, 0-65535."
+    "--writer",
+    type=click.IntRange(0, 0xFFFF),
+    help="This writer's id, 0-65535 [default: a robot key file's own; the operator key needs it].",
 )
 @click.option(
     "--role",
@@ -132,7 +137,7 @@ def write_cmd(
     *,
     address: str,
     key_file: Path,
-    writer: int,
+    writer: int | None,
     role: str | None,
     urgency: int | None,
     status: TagStatus | None,
@@ -157,12 +162,14 @@ def write_cmd(
     if change.empty:
         raise click.UsageError("give at least one of --urgency, --status, --destination")
     address = check_address(address)
-    found, key = read_role_key_file(key_file)
+    key_file_holds = read_writer_key_file(key_file)
+    found, key = key_file_holds.role, key_file_holds.key
     if role is not None and role != found.name.lower():
         raise ConfigError(
             f"--role {role} does not match the key file {key_file}, which holds the "
             f"{found.name.lower()} key; nothing was sent"
         )
+    writer = key_file_holds.writer_id(writer, key_file)
     counters = CounterFile(counter_file or counter_file_for(key_file))
     counters.check()
     try:

@@ -20,11 +20,15 @@ from swarmtag.tag.codec import (
 from swarmtag.tag.filestore import FileStore
 from swarmtag.tag.gatt import ATT_ERRORS, SERVICE_UUID, STATE_CHAR_UUID, WRITE_CHAR_UUID
 from swarmtag.tag.keys import (
+    WriterKey,
+    derive_robot_key,
     derive_role_key,
     generate_site_key,
     read_key_file,
     read_role_key_file,
+    read_writer_key_file,
     write_key_file,
+    write_robot_key_file,
     write_role_key_file,
 )
 from swarmtag.tag.lifecycle import ROBOT_TRANSITIONS, Change, Role, apply_change
@@ -68,17 +72,21 @@ __all__ = [
     "TagStore",
     "Write",
     "WriteSigner",
+    "WriterKey",
     "apply_change",
     "decode",
     "decode_manufacturer_data",
+    "derive_robot_key",
     "derive_role_key",
     "encode",
     "encode_manufacturer_data",
     "generate_site_key",
     "read_key_file",
     "read_role_key_file",
+    "read_writer_key_file",
     "sign",
     "verify",
     "write_key_file",
+    "write_robot_key_file",
     "write_role_key_file",
 ]

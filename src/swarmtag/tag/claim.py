@@ -14,7 +14,7 @@ over. It is an extension: tags and robots without it ignore it.
     byte  8      target marker id
     byte  9      hold: seconds the claim lasts, 1-255
     bytes 10-11  zero
-    bytes 12-19  MAC: HMAC-SHA256(robot role key, bytes 0-11), first 8 bytes
+    bytes 12-19  MAC: HMAC-SHA256(the robot's key, bytes 0-11), first 8 bytes
 
 A tag that knows claims checks it as a version-1 write (length, MAC first,
 format, target, counter, writer table) and grants it when the tag is
@@ -100,11 +100,11 @@ def _signed(claim: ClaimWrite) -> bytes:
 def sign_claim(signer: WriteSigner, target: int, hold: int) -> bytes:
     """The 20 bytes of a claim on tag ``target`` for ``hold`` seconds, with the next counter.
 
-    ``signer`` must be a robot's (its role key signs). A refused argument
+    ``signer`` must be a robot's (its own key signs). A refused argument
     leaves its counter as it was.
 
-    >>> from swarmtag.tag import derive_role_key
-    >>> robot = WriteSigner(writer=7, role=Role.ROBOT, key=derive_role_key(b"k" * 16, Role.ROBOT))
+    >>> from swarmtag.tag import derive_robot_key
+    >>> robot = WriteSigner(writer=7, role=Role.ROBOT, key=derive_robot_key(b"k" * 16, 7))
     >>> sign_claim(robot, 12, 30)[:12].hex()
     '02010700000000000c1e0000'
     """
@@ -121,13 +121,16 @@ def sign_claim(signer: WriteSigner, target: int, hold: int) -> bytes:
     return message
 
 
-def verify_claim(message: bytes | bytearray | memoryview, key: bytes) -> ClaimWrite:
+def verify_claim(
+    message: bytes | bytearray | memoryview, key: bytes, *, shared_robot_key: bool = False
+) -> ClaimWrite:
     """Check a claim write's MAC under the site key ``key``, then its format; or raise.
 
-    ``ForgedWrite``/``MalformedWrite`` as for any write; ``RoleNotAllowed``
-    for an authentic claim that names the operator's role.
+    ``ForgedWrite``/``MalformedWrite`` as for any write (``shared_robot_key``
+    as for ``verify``); ``RoleNotAllowed`` for an authentic claim that names
+    the operator's role.
     """
-    signed, role = authenticated(message, key)
+    signed, role = authenticated(message, key, shared_robot_key=shared_robot_key)
     version, flags = signed[0], signed[1]
     if version != CLAIM_WRITE_VERSION:
         msg = f"claim format version {version} is not {CLAIM_WRITE_VERSION}"

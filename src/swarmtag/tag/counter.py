@@ -26,14 +26,25 @@ line feed::
 
 On POSIX systems a reservation holds an exclusive ``flock`` on the folder,
 so two processes using the same file never reserve the same value. The
-parsing and formatting (``parse_counters``, ``format_counters``) are pure.
+parsing and formatting (``parse_counters``, ``format_counters``) are pure
+and take time linear in the file's size (a full table of 65,536 writers is
+at most about 1.1 MB).
+
+A write reads the file once: ``check`` (before the radio) parses it and
+keeps the table with the file's identity (device, inode, size, modification
+and change times); ``reserve``, under the lock, reuses that table when the
+file's identity is unchanged and the file had settled when it was read (its
+change time at least ``_SETTLED_NS`` before the read, so no later file can
+carry the same identity), and reads it again otherwise.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
 import stat
+import time
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
@@ -57,13 +68,25 @@ COUNTER_FILE_HEADER: Final = "swarmtag-writer-counters-v1"
 """First line of a counter file."""
 _MAX_WRITER: Final = 0xFFFF
 _LINE: Final = re.compile(r"(0|[1-9][0-9]{0,4}) (0|[1-9][0-9]{0,9})")
+_BODY: Final = re.compile(r"(?:(?:0|[1-9][0-9]{0,4}) (?:0|[1-9][0-9]{0,9})\n)*")
+"""Every line after the header, at once: ``_LINE`` and a line feed, repeated."""
 _MAX_FILE_BYTES: Final = 2 << 20
 """A full table (65,536 writers) is about 1.1 MB; anything over 2 MiB is not a counter file."""
 _TEMP_NAME: Final = r"\.{name}\.[0-9a-f]{{12}}\.tmp"  # swarmtag._atomic's temporary file names
+_SETTLED_NS: Final = 2_000_000_000
+"""A file changed less than 2 s before it was read may share its identity with a later one
+(coarse file-system timestamps, an inode number reused): its table is read again."""
+
+_Identity = tuple[int, int, int, int, int]
 
 
 def parse_counters(data: bytes) -> dict[int, int]:
     r"""The table writer id -> last counter in a counter file's bytes; ``ValueError`` if bad.
+
+    Linear in the file's size: one regular expression checks every line's
+    form at once, then the numbers are converted and their ranges and order
+    checked in passes over lists; any other file is gone through line by
+    line, to say which line is wrong (or, for CR LF line ends, to read it).
 
     >>> parse_counters(b"swarmtag-writer-counters-v1\n7 41\n")
     {7: 41}
@@ -77,15 +100,31 @@ def parse_counters(data: bytes) -> dict[int, int]:
         raise ValueError(f"the first line is not {COUNTER_FILE_HEADER!r}")
     if body and not body.endswith("\n"):
         raise ValueError("the last line does not end in a line feed")
+    if _BODY.fullmatch(body):
+        numbers = [int(number) for number in body.split()]
+        writers, counters = numbers[0::2], numbers[1::2]
+        if (
+            max(writers, default=0) <= _MAX_WRITER
+            and max(counters, default=0) <= MAX_COUNTER
+            and all(a < b for a, b in itertools.pairwise(writers))
+        ):
+            return dict(zip(writers, counters, strict=True))
+    return _parse_lines(body)
+
+
+def _parse_lines(body: str) -> dict[int, int]:
+    """``parse_counters`` line by line (also linear): names the first bad line of ``body``."""
     table: dict[int, int] = {}
+    previous = -1  # the last writer id: ids increase, so each line is checked in O(1)
     for number, line in enumerate(body.splitlines(), start=2):
         match = _LINE.fullmatch(line)
         writer, counter = (int(match[1]), int(match[2])) if match else (-1, -1)
         if not (0 <= writer <= _MAX_WRITER and 0 <= counter <= MAX_COUNTER):
             raise ValueError(f"line {number} is not '<writer id> <counter>' in range")
-        if table and writer <= max(table):
+        if writer <= previous:
             raise ValueError(f"line {number}: writer ids are not in increasing order")
         table[writer] = counter
+        previous = writer
     return table
 
 
@@ -95,12 +134,18 @@ def format_counters(table: Mapping[int, int]) -> bytes:
     >>> format_counters({12: 3, 7: 41}).decode()
     'swarmtag-writer-counters-v1\n7 41\n12 3\n'
     """
-    lines = [COUNTER_FILE_HEADER]
-    for writer, counter in sorted(table.items()):
-        check_int("writer", writer, _MAX_WRITER)
-        check_int("counter", counter, MAX_COUNTER)
-        lines.append(f"{writer} {counter}")
-    return ("\n".join(lines) + "\n").encode("ascii")
+    rows = sorted(table.items())
+    plain = all(type(writer) is int and type(counter) is int for writer, counter in rows)
+    if not (
+        plain
+        and (not rows or (rows[0][0] >= 0 and rows[-1][0] <= _MAX_WRITER))
+        and all(0 <= counter <= MAX_COUNTER for _writer, counter in rows)
+    ):
+        for writer, counter in rows:  # say which entry is wrong
+            check_int("writer", writer, _MAX_WRITER)
+            check_int("counter", counter, MAX_COUNTER)
+    lines = [f"{COUNTER_FILE_HEADER}\n", *(f"{writer} {counter}\n" for writer, counter in rows)]
+    return "".join(lines).encode("ascii")
 
 
 class CounterFile:
@@ -113,6 +158,8 @@ class CounterFile:
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = as_path(path, what="counter file path", error=CounterFileError)
+        self._seen: tuple[_Identity, dict[int, int]] | None = None
+        """The last table read or written, with the identity of the settled file it came from."""
 
     def check(self) -> Mapping[int, int]:
         """Read the table now (empty if the file does not exist yet); refuse an unusable file.
@@ -121,16 +168,7 @@ class CounterFile:
         be a counter file: a write is never signed with a counter that cannot
         be saved first.
         """
-        folder = self.path.parent
-        if not os.path.isdir(folder):  # noqa: PTH112 - Path.is_dir raises ENAMETOOLONG
-            raise CounterFileError(
-                f"counter file {self.path}: folder {folder} does not exist (create it first)"
-            )
-        if not os.access(folder, os.W_OK | os.X_OK):
-            raise CounterFileError(
-                f"counter file {self.path}: folder {folder} is not writable; "
-                "give a --counter-file in a folder this user may write"
-            )
+        self._check_folder()
         return MappingProxyType(self._load())
 
     def last(self, writer: int) -> int | None:
@@ -144,7 +182,7 @@ class CounterFile:
         (2**32 - 1): retire the id. Nothing is written then.
         """
         check_int("writer", writer, _MAX_WRITER)
-        self.check()
+        self._check_folder()
         with self._locked():
             table = self._load()
             last = table.get(writer, -1)
@@ -157,15 +195,39 @@ class CounterFile:
             data = format_counters(table)
             try:
                 atomic_write_bytes(self.path, data)
+                self._remember(self.path.stat(), time.time_ns(), table)
             except OSError as error:
+                self._seen = None
                 raise CounterFileError(
                     f"cannot save counter file {self.path}: {error.strerror or error}; "
                     "nothing was sent"
                 ) from None
             return last + 1
 
+    def _check_folder(self) -> None:
+        """Refuse a missing or unwritable folder: the counter could not be saved there."""
+        folder = self.path.parent
+        if not os.path.isdir(folder):  # noqa: PTH112 - Path.is_dir raises ENAMETOOLONG
+            raise CounterFileError(
+                f"counter file {self.path}: folder {folder} does not exist (create it first)"
+            )
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise CounterFileError(
+                f"counter file {self.path}: folder {folder} is not writable; "
+                "give a --counter-file in a folder this user may write"
+            )
+
+    def _remember(self, info: os.stat_result, read_ns: int, table: dict[int, int]) -> None:
+        """Keep ``table`` for the file ``info`` describes if it had settled at ``read_ns``."""
+        identity = (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns, info.st_ctime_ns)
+        settled = max(info.st_mtime_ns, info.st_ctime_ns) <= read_ns - _SETTLED_NS
+        self._seen = (identity, dict(table)) if settled else None
+
     def _load(self) -> dict[int, int]:
-        """The table in the file now, or an empty one if there is no file yet."""
+        """The table in the file now (a copy), or an empty one if there is no file yet.
+
+        The file is read only if it is not the settled file read last time.
+        """
         try:
             fd = os.open(self.path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))  # no FIFO hang
         except FileNotFoundError:
@@ -177,11 +239,15 @@ class CounterFile:
                 f"cannot read counter file {self.path}: {error.strerror or error}"
             ) from None
         try:
-            mode = os.fstat(fd).st_mode
-            if stat.S_ISDIR(mode):
+            info = os.fstat(fd)
+            if stat.S_ISDIR(info.st_mode):
                 raise self._folder()
-            if not stat.S_ISREG(mode):
+            if not stat.S_ISREG(info.st_mode):
                 raise CounterFileError(f"counter file {self.path} is not a regular file")
+            identity = (info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns, info.st_ctime_ns)
+            if self._seen is not None and self._seen[0] == identity:
+                return dict(self._seen[1])
+            read_ns = time.time_ns()
             data = os.read(fd, _MAX_FILE_BYTES + 1)
             if len(data) > _MAX_FILE_BYTES:
                 raise CounterFileError(f"counter file {self.path} is too large to be one")
@@ -192,12 +258,14 @@ class CounterFile:
         finally:
             os.close(fd)
         try:
-            return parse_counters(data)
+            table = parse_counters(data)
         except ValueError as error:
             raise CounterFileError(
                 f"{self.path} is not a swarmtag counter file ({error}); give another "
                 "--counter-file, or move this one away (a new file starts each writer at 0)"
             ) from None
+        self._remember(info, read_ns, table)
+        return table
 
     def _folder(self) -> CounterFileError:
         return CounterFileError(

@@ -13,10 +13,10 @@ reason.
 The BLE adapters (``swarmtag.tag.backends.bless``, the replay server) call
 this from one thread; it does no I/O of its own beyond the store.
 
->>> from swarmtag.tag import Change, MemoryStore, Role, WriteSigner, derive_role_key
+>>> from swarmtag.tag import Change, MemoryStore, Role, WriteSigner, derive_robot_key
 >>> key = bytes(range(16))
 >>> tag = SoftwareTag.open(marker=12, site_key=key, store=MemoryStore(), status="awaiting_pickup")
->>> robot = WriteSigner(writer=3, role=Role.ROBOT, key=derive_role_key(key, Role.ROBOT))
+>>> robot = WriteSigner(writer=3, role=Role.ROBOT, key=derive_robot_key(key, 3))
 >>> lift = robot.sign(12, Change(status=TagStatus.PICKED_UP))
 >>> tag.write(lift).accepted, tag.state_value().hex()
 (True, '0002000c')
@@ -86,9 +86,16 @@ class SoftwareTag:
         """Whether this tag was set up from scratch when it was built (else it booted)."""
 
     @classmethod
-    def provision(cls, state: TagState, *, site_key: bytes, store: TagStore) -> SoftwareTag:
-        """A new tag in ``state`` with no writers seen, saved to ``store`` (overwriting it)."""
-        model = TagModel.provision(state, site_key=site_key, store=store)
+    def provision(
+        cls, state: TagState, *, site_key: bytes, store: TagStore, shared_robot_key: bool = False
+    ) -> SoftwareTag:
+        """A new tag in ``state`` with no writers seen, saved to ``store`` (overwriting it).
+
+        ``shared_robot_key``: also accept the legacy shared robot key (``TagModel``).
+        """
+        model = TagModel.provision(
+            state, site_key=site_key, store=store, shared_robot_key=shared_robot_key
+        )
         return cls(model, site_key=site_key, provisioned=True)
 
     @classmethod
@@ -106,6 +113,7 @@ class SoftwareTag:
         urgency: int | None = None,
         status: TagStatus | str | int | None = None,
         destination: int | None = None,
+        shared_robot_key: bool | None = None,
     ) -> SoftwareTag:
         """Boot the tag in ``store``, or provision it there if the store is empty.
 
@@ -114,7 +122,10 @@ class SoftwareTag:
         A stored tag keeps what it has: giving any of those three for it is
         refused, and so is a ``marker`` other than the stored one
         (``FieldRangeError``), because re-provisioning under the same site key
-        would reopen old counters to replay.
+        would reopen old counters to replay. ``shared_robot_key`` (legacy),
+        if given, sets whether the tag also accepts the shared robot key, on a
+        new tag (default off) or a stored one (saved at once; ``None`` keeps
+        the stored setting).
         """
         check_int("marker", marker, 0xFF)
         given = {
@@ -134,7 +145,8 @@ class SoftwareTag:
                 destination=0 if destination is None else destination,
                 marker=marker,
             )
-            return cls.provision(state, site_key=site_key, store=store)
+            shared = False if shared_robot_key is None else shared_robot_key
+            return cls.provision(state, site_key=site_key, store=store, shared_robot_key=shared)
         tag = cls.boot(site_key=site_key, store=store)
         stored = tag.state.marker
         if stored != marker:
@@ -148,12 +160,23 @@ class SoftwareTag:
                 f"{names}: only set up a new tag, and tag {stored} is already provisioned "
                 f"({_fields(tag.state)}); change it with an operator write"
             )
+        if shared_robot_key is not None:
+            tag.set_shared_robot_key(shared_robot_key)
         return tag
 
     @property
     def state(self) -> TagState:
         """What the tag advertises now."""
         return self._model.state
+
+    @property
+    def shared_robot_key(self) -> bool:
+        """Whether the tag also accepts robot writes under the legacy shared robot key."""
+        return self._model.shared_robot_key
+
+    def set_shared_robot_key(self, enabled: bool) -> None:
+        """Turn acceptance of the legacy shared robot key on or off (saved; ``TagModel``)."""
+        self._model.set_shared_robot_key(enabled)
 
     @property
     def counts(self) -> Counter[str]:
@@ -179,7 +202,8 @@ class SoftwareTag:
         not act on a write it could not persist.
         """
         try:
-            write: Write | None = verify(value, self._key)
+            shared = self._model.shared_robot_key
+            write: Write | None = verify(value, self._key, shared_robot_key=shared)
         except WriteRejected:
             write = None  # the model refuses it again below, with the same error
         try:

@@ -1,9 +1,10 @@
 """Who may change what on a tag (SPEC §2.2): the lifecycle as a pure function.
 
 Robots make exactly two forward transitions, ``AWAITING_PICKUP → PICKED_UP``
-(lift) and ``PICKED_UP → IDLE`` (release), and touch nothing else. Operators
-(a person or the warehouse management system) may set any status, urgency or
-destination.
+(lift) and ``PICKED_UP → IDLE`` (release), and touch nothing else; a release
+is taken only from the robot that lifted the carrier (``next_lifter``).
+Operators (a person or the warehouse management system) may set any status,
+urgency or destination, whoever lifted the carrier.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from swarmtag.tag._arguments import CheckedEnumType, check_type, describe
 from swarmtag.tag.codec import TagState
 from swarmtag.tag.status import TagStatus
 
-__all__ = ["ROBOT_TRANSITIONS", "Change", "Role", "apply_change", "check_role"]
+__all__ = ["ROBOT_TRANSITIONS", "Change", "Role", "apply_change", "check_role", "next_lifter"]
 
 _ROLES: Final = "use Role.ROBOT (1) or Role.OPERATOR (2)"
 
@@ -120,3 +121,42 @@ def apply_change(state: TagState, change: Change, role: Role) -> TagState:
         status=state.status if change.status is None else change.status,
         destination=state.destination if change.destination is None else change.destination,
     )
+
+
+def next_lifter(
+    lifter: int | None, before: TagStatus, after: TagStatus, *, writer: int, role: Role
+) -> int | None:
+    """The writer id a tag remembers as its carrier's lifter after a write, or a refusal.
+
+    ``lifter`` is the one remembered before the write (``None``: none) and
+    ``before``/``after`` the statuses the write moves between (``apply_change``
+    has allowed it). A robot's lift binds the carrier to that robot; a robot
+    may move a carrier out of PICKED_UP only if it is the lifter (or none is
+    known: set by an operator, or remembered by no older record); any status
+    other than PICKED_UP forgets the lifter. Operators may override.
+    ``IllegalTransition`` (ATT 0x84) for another robot's release.
+
+    >>> next_lifter(None, TagStatus.AWAITING_PICKUP, TagStatus.PICKED_UP, writer=9, role=Role.ROBOT)
+    9
+    >>> next_lifter(9, TagStatus.PICKED_UP, TagStatus.IDLE, writer=7, role=Role.ROBOT)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.IllegalTransition: robot 7 may not release this carrier: robot 9 lifted it ...
+    """
+    role = check_role(role)
+    moved = after is not before
+    if (
+        before is TagStatus.PICKED_UP
+        and moved
+        and role is Role.ROBOT
+        and lifter not in (None, writer)
+    ):
+        raise IllegalTransition(
+            f"robot {writer} may not release this carrier: robot {lifter} lifted it "
+            "(only that robot, or an operator, may)"
+        )
+    if after is not TagStatus.PICKED_UP:
+        return None
+    if moved:
+        return writer if role is Role.ROBOT else None
+    return lifter

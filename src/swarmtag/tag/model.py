@@ -1,9 +1,10 @@
 """The tag's logic: apply an authenticated write or refuse it, leaving nothing changed.
 
 ``TagModel`` is what runs on the nRF board (and in the software tag and the
-simulator): it verifies the MAC (under the key of the role the write names,
-derived from the site key it holds), the target, the writer's counter and the
-role's rights and that its writer table has room, persists the new record
+simulator): it verifies the MAC (under the key of the role and writer id the
+write names, derived from the site key it holds), the target, the writer's
+counter, the role's rights, that a release comes from the robot that lifted
+the carrier and that its writer table has room, persists the new record
 *before* acting on it (so a power loss can never make a used counter usable
 again), and only then changes.
 """
@@ -11,6 +12,7 @@ again), and only then changes.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import Protocol, cast
 
 from swarmtag.errors import (
@@ -23,7 +25,7 @@ from swarmtag.errors import (
 from swarmtag.tag._arguments import as_bytes, check_clock, check_type
 from swarmtag.tag.claim import Claim, grant_claim, verify_claim
 from swarmtag.tag.codec import TagState
-from swarmtag.tag.lifecycle import apply_change
+from swarmtag.tag.lifecycle import apply_change, next_lifter
 from swarmtag.tag.record import MAX_WRITERS, TagRecord
 from swarmtag.tag.status import TagStatus
 from swarmtag.tag.write import check_site_key, verify
@@ -72,17 +74,18 @@ class TagModel:
     Create one with ``provision`` (factory setup) or ``boot`` (power-on from
     the persisted record).
 
-    >>> from swarmtag.tag import Change, Role, TagStatus, WriteSigner, derive_role_key
+    >>> from swarmtag.tag import Change, Role, TagStatus, WriteSigner, derive_robot_key
     >>> key = bytes(range(16))
     >>> store = MemoryStore()
     >>> tag = TagModel.provision(
     ...     TagState(urgency=5, status=TagStatus.AWAITING_PICKUP, destination=0, marker=12),
     ...     site_key=key, store=store)
-    >>> robot = WriteSigner(writer=3, role=Role.ROBOT, key=derive_role_key(key, Role.ROBOT))
+    >>> robot = WriteSigner(writer=3, role=Role.ROBOT, key=derive_robot_key(key, 3))
     >>> tag.apply(robot.sign(12, Change(status=TagStatus.PICKED_UP))).status.name
     'PICKED_UP'
-    >>> TagModel.boot(site_key=key, store=store).counters  # after a power cycle
-    mappingproxy({3: 0})
+    >>> rebooted = TagModel.boot(site_key=key, store=store)  # after a power cycle
+    >>> rebooted.counters, rebooted.lifter
+    (mappingproxy({3: 0}), 3)
     """
 
     def __init__(self, record: TagRecord, *, site_key: bytes, store: TagStore) -> None:
@@ -92,18 +95,27 @@ class TagModel:
         self._claim: Claim | None = None
 
     @classmethod
-    def provision(cls, state: TagState, *, site_key: bytes, store: TagStore) -> TagModel:
-        """Set up a tag from scratch: ``state``, no writers seen; persist it.
+    def provision(
+        cls, state: TagState, *, site_key: bytes, store: TagStore, shared_robot_key: bool = False
+    ) -> TagModel:
+        """Set up a tag from scratch: ``state``, no writers seen, no lifter; persist it.
 
+        ``shared_robot_key`` (legacy, off by default) makes the tag also accept
+        robot writes under the one key all robots shared before per-robot keys.
         Every argument is checked before anything is saved.
         """
-        tag = cls(TagRecord(state=state), site_key=site_key, store=store)
+        record = TagRecord(state=state, shared_robot_key=shared_robot_key)
+        tag = cls(record, site_key=site_key, store=store)
         tag._store.save(tag._record.to_bytes())
         return tag
 
     @classmethod
     def boot(cls, *, site_key: bytes, store: TagStore) -> TagModel:
-        """Power on: restore state and counters from ``store``."""
+        """Power on: restore state, settings, lifter and counters from ``store``.
+
+        A version-1 record (written before per-robot keys) boots as a tag that
+        accepts the shared robot key, as it did (``TagRecord``).
+        """
         check_site_key(site_key)
         data = _check_store(store).load()
         if data is None:
@@ -120,18 +132,50 @@ class TagModel:
         """Highest counter accepted from each writer id."""
         return self._record.counters
 
+    @property
+    def lifter(self) -> int | None:
+        """The writer id of the robot that lifted the carrier (while PICKED_UP), or ``None``."""
+        return self._record.lifter
+
+    @property
+    def shared_robot_key(self) -> bool:
+        """Whether robot writes under the legacy shared robot key are accepted too."""
+        return self._record.shared_robot_key
+
+    def set_shared_robot_key(self, enabled: bool) -> None:
+        """Turn acceptance of the legacy shared robot key on or off, and persist it.
+
+        A provisioning setting (whoever holds the site key), not a write: the
+        counters and the lifter are kept. Turn it off once every robot has its
+        own key (docs/tag-protocol.md §4).
+        """
+        new = replace(self._record, shared_robot_key=enabled)  # checks ``enabled``
+        if new != self._record:
+            self._store.save(new.to_bytes())
+            self._record = new
+
     def apply(self, message: bytes | bytearray | memoryview) -> TagState:
         """Apply one 20-byte write and return the new state, or raise ``WriteRejected``.
 
         A refused write changes nothing: not the state, not the counters, not the store.
-        A message that is not bytes-like is a ``MalformedWrite``; a write from a new
+        A message that is not bytes-like is a ``MalformedWrite``; a robot releasing a
+        carrier another robot lifted is ``IllegalTransition``; a write from a new
         writer when ``MAX_WRITERS`` are already tracked is ``WriterTableFull``.
         """
-        write = verify(message, self._key)  # refuses a message that is not bytes-like, too
+        record = self._record
+        # refuses a message that is not bytes-like, too
+        write = verify(message, self._key, shared_robot_key=record.shared_robot_key)
         last = self._admit(write.writer, write.counter, write.target)
-        new_state = apply_change(self._record.state, write.change, write.role)
+        new_state = apply_change(record.state, write.change, write.role)
+        lifter = next_lifter(
+            record.lifter,
+            record.state.status,
+            new_state.status,
+            writer=write.writer,
+            role=write.role,
+        )
         self._room_for(write.writer, last)
-        self._persist(new_state, write.writer, write.counter)
+        self._persist(new_state, write.writer, write.counter, lifter)
         if new_state.status is not TagStatus.AWAITING_PICKUP:
             self._claim = None  # a claim ends with the wait it reserved
         return new_state
@@ -144,11 +188,11 @@ class TagModel:
         Raises a ``WriteRejected`` (``ClaimRefused`` among them) otherwise.
         """
         now = check_clock("now", now)
-        write = verify_claim(message, self._key)
+        write = verify_claim(message, self._key, shared_robot_key=self._record.shared_robot_key)
         last = self._admit(write.writer, write.counter, write.target)
         granted = grant_claim(write, status=self._record.state.status, held=self._claim, now=now)
         self._room_for(write.writer, last)
-        self._persist(self._record.state, write.writer, write.counter)
+        self._persist(self._record.state, write.writer, write.counter, self._record.lifter)
         self._claim = granted
         return granted
 
@@ -181,8 +225,13 @@ class TagModel:
                 "the site key and re-provision the tag)"
             )
 
-    def _persist(self, state: TagState, writer: int, counter: int) -> None:
+    def _persist(self, state: TagState, writer: int, counter: int, lifter: int | None) -> None:
         """Save the new record first, then take it (a power loss keeps old or new)."""
-        new = TagRecord(state=state, counters={**self._record.counters, writer: counter})
+        new = TagRecord(
+            state=state,
+            counters={**self._record.counters, writer: counter},
+            lifter=lifter,
+            shared_robot_key=self._record.shared_robot_key,
+        )
         self._store.save(new.to_bytes())
         self._record = new

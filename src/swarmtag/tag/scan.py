@@ -2,8 +2,17 @@
 
 A robot's radio hears every BLE device nearby. ``ScanFilter.feed`` turns one
 advertisement's manufacturer data into a ``TagState``, or ``None`` when it is
-not ours (no 0xFFFF entry) or is malformed; nothing is ever raised, and the
-counters say what was seen so a field engineer can spot a broken tag.
+foreign or malformed; nothing is ever raised, and the counters say what was
+seen so a field engineer can spot a broken tag. The rule:
+
+- **foreign**: no 0xFFFF entry (another company's device), or a 0xFFFF entry
+  that is not 4 bytes long (a whole payload other than 6 bytes): 0xFFFF is
+  the identifier reserved for tests and internal use, and other devices
+  (battery monitors, beacons) advertise under it too, with other lengths;
+- **malformed**: a 0xFFFF entry of the tag's length whose values are not a
+  tag state (urgency above 9, an unknown status), or input that is not
+  manufacturer data at all (not bytes, not a mapping of bytes). A rising
+  count means a broken tag (or a foreign device that happens to send 4 bytes).
 """
 
 from __future__ import annotations
@@ -13,7 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Final
 
-from swarmtag.errors import FieldRangeError, ForeignCompanyError, PayloadError
+from swarmtag.errors import FieldRangeError, ForeignCompanyError, PayloadError, PayloadLengthError
 from swarmtag.tag._arguments import check_int
 from swarmtag.tag.codec import TagState, decode, decode_manufacturer_data
 
@@ -34,12 +43,15 @@ class ScanFilter:
     7
     >>> scan.feed({0xFFFF: b"\x0a\x01\x03\x0c"}) is None  # urgency 10: malformed
     True
+    >>> scan.feed({0xFFFF: b"\x01\x02\x03"}) is None  # 0xFFFF, 3 bytes: another device
+    True
     >>> (scan.accepted, scan.foreign, scan.malformed)
-    (1, 1, 1)
+    (1, 2, 1)
     """
 
     accepted: int = 0
     foreign: int = 0
+    """Adverts of other devices: no 0xFFFF entry, or one of another length than a tag's."""
     errors: Counter[str] = field(default_factory=Counter)
     """Malformed payloads by error class name (e.g. ``UrgencyRangeError``)."""
 
@@ -59,20 +71,21 @@ class ScanFilter:
 
     @property
     def malformed(self) -> int:
-        """How many payloads claimed to be ours but could not be decoded."""
+        """How many payloads of a tag's length (or not data at all) could not be decoded."""
         return sum(self.errors.values())
 
     def feed(self, manufacturer_data: Mapping[int, bytes] | bytes) -> TagState | None:
         """Decode the mapping form (or raw 6-byte form); ``None`` if foreign or malformed.
 
-        Input that is neither (a str, None, a number) counts as malformed ``PayloadError``.
+        A wrong length (``PayloadLengthError``) counts as foreign; input that is
+        neither form (a str, None, a number) as malformed ``PayloadError``.
         """
         try:
             if isinstance(manufacturer_data, Mapping):
                 state = decode_manufacturer_data(manufacturer_data)
             else:
                 state = decode(manufacturer_data)
-        except ForeignCompanyError:
+        except (ForeignCompanyError, PayloadLengthError):
             self.foreign += 1
             return None
         except PayloadError as error:

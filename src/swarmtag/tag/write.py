@@ -12,14 +12,19 @@ Layout (multi-byte integers little-endian, as everywhere in BLE)::
     byte  9      new urgency (0 when absent)
     byte  10     new status (0 when absent)
     byte  11     new destination (0 when absent)
-    bytes 12-19  MAC: HMAC-SHA256(role key, bytes 0-11) truncated to 8 bytes
+    bytes 12-19  MAC: HMAC-SHA256(writer key, bytes 0-11) truncated to 8 bytes
 
-The role key is ``derive_role_key(site_key, role)`` of the role in byte 1
-(``swarmtag.tag.keys``): writers hold only their role's key, tags hold the
-site key and derive the role key of each write. The MAC is checked before any
-other field is interpreted, so a forger learns nothing from which error comes
-back; role bits that name no role (0 or 3) select no key, so such a write
-never verifies. Arguments of the wrong type or range raise ``FieldRangeError``
+The writer key (``swarmtag.tag.keys``) is, for a robot write, the key bound to
+the writer id in bytes 2-3, ``derive_robot_key(site_key, writer)``, and for an
+operator write the operator key, ``derive_role_key(site_key, Role.OPERATOR)``.
+Writers hold only their own key; tags hold the site key and derive the key of
+each write from its role bits and writer id, so a robot's key signs nothing
+under another writer id. A tag set to accept the legacy shared robot key
+(``shared_robot_key``) also takes a robot write under
+``derive_role_key(site_key, Role.ROBOT)``. The MAC is checked before any other
+field is interpreted, so a forger learns nothing from which error comes back;
+role bits that name no role (0 or 3) select no key, so such a write never
+verifies. Arguments of the wrong type or range raise ``FieldRangeError``
 (``MalformedWrite`` for a message that is not bytes).
 """
 
@@ -33,7 +38,13 @@ from typing import Final
 from swarmtag.errors import FieldRangeError, ForgedWrite, MalformedWrite
 from swarmtag.tag._arguments import as_bytes, check_int, check_type
 from swarmtag.tag.codec import MAX_URGENCY
-from swarmtag.tag.keys import MIN_KEY_LENGTH, check_role_key, check_site_key, derive_role_key
+from swarmtag.tag.keys import (
+    MIN_KEY_LENGTH,
+    check_role_key,
+    check_site_key,
+    derive_robot_key,
+    derive_role_key,
+)
 from swarmtag.tag.lifecycle import Change, Role, check_role
 from swarmtag.tag.status import TagStatus
 
@@ -49,6 +60,7 @@ __all__ = [
     "mac",
     "sign",
     "verify",
+    "writer_keys",
 ]
 
 WRITE_LENGTH: Final = 20
@@ -96,12 +108,14 @@ def _mac(key: bytes, signed: bytes) -> bytes:
 
 
 def sign(write: Write, key: bytes) -> bytes:
-    """The 20 bytes to send for ``write``, signed with ``key``, the key of ``write.role``.
+    """The 20 bytes to send for ``write``, signed with ``key``, the writer's key.
 
-    ``key`` is ``derive_role_key(site_key, write.role)``; under any other key
-    (the site key itself, another role's key) the tag refuses the write as forged.
+    ``key`` is ``derive_robot_key(site_key, write.writer)`` for a robot and
+    ``derive_role_key(site_key, Role.OPERATOR)`` for an operator; under any
+    other key (the site key itself, another robot's key) the tag refuses the
+    write as forged.
 
-    >>> key = derive_role_key(b"k" * 16, Role.ROBOT)
+    >>> key = derive_robot_key(b"k" * 16, 7)
     >>> msg = sign(Write(writer=7, role=Role.ROBOT, counter=1, target=12,
     ...                  change=Change(status=TagStatus.PICKED_UP)), key)
     >>> len(msg), msg[:12].hex()
@@ -128,40 +142,71 @@ def sign(write: Write, key: bytes) -> bytes:
     return signed + _mac(check_role_key(key), signed)
 
 
-def authenticated(message: bytes | bytearray | memoryview, key: bytes) -> tuple[bytes, Role]:
+def writer_keys(site_key: bytes, role: Role, writer: int, *, shared_robot_key: bool) -> list[bytes]:
+    """The keys a tag accepts a write of ``role`` from ``writer`` under (one, or two if legacy).
+
+    A robot: its own key, and the shared robot key too when the tag is set to
+    accept it. An operator: the operator key.
+    """
+    if role is Role.OPERATOR:
+        return [derive_role_key(site_key, Role.OPERATOR)]
+    own = derive_robot_key(site_key, writer)
+    return [own, derive_role_key(site_key, Role.ROBOT)] if shared_robot_key else [own]
+
+
+def authenticated(
+    message: bytes | bytearray | memoryview, key: bytes, *, shared_robot_key: bool = False
+) -> tuple[bytes, Role]:
     """The signed 12 bytes of a 20-byte write whose MAC verifies, and the role it names.
 
     Every write format shares this: the length, then the MAC under the key
-    of the role in byte 1's bits 0-1 (derived from the site key ``key``),
-    before anything else is read; ``MalformedWrite`` or ``ForgedWrite``.
+    of the role in byte 1's bits 0-1 and the writer id in bytes 2-3 (derived
+    from the site key ``key``; ``writer_keys``), before anything else is read;
+    ``MalformedWrite`` or ``ForgedWrite``. Every candidate key is tried, so
+    the time taken does not say which one matched.
     """
     data = as_bytes("message", message, MalformedWrite)
     if len(data) != WRITE_LENGTH:
         raise MalformedWrite(f"a write is {WRITE_LENGTH} bytes, got {len(data)}")
     signed, tag = data[:_SIGNED], data[_SIGNED:]
     site_key = check_site_key(key)
+    shared: object = shared_robot_key  # callers without a type checker may pass anything
+    if not isinstance(shared, bool):
+        raise FieldRangeError(
+            f"shared_robot_key: expected True or False, got a {type(shared).__name__}"
+        )
     role_bits = signed[1] & _ROLE_BITS
-    if role_bits not in _ROLES or not hmac.compare_digest(
-        _mac(derive_role_key(site_key, Role(role_bits)), signed), tag
-    ):
-        raise ForgedWrite("the write's MAC does not verify under the key of the role it names")
+    verified = False
+    if role_bits in _ROLES:
+        writer = int.from_bytes(signed[2:4], "little")
+        keys = writer_keys(site_key, Role(role_bits), writer, shared_robot_key=shared_robot_key)
+        for candidate in keys:
+            verified |= hmac.compare_digest(_mac(candidate, signed), tag)
+    if not verified:
+        raise ForgedWrite(
+            "the write's MAC does not verify under the key of the role and writer id it names"
+        )
     return signed, Role(role_bits)
 
 
 def mac(key: bytes, signed: bytes) -> bytes:
-    """The 8-byte MAC of the signed part of a write under a role key (HMAC-SHA256, truncated)."""
+    """The 8-byte MAC of the signed part of a write under a writer's key (HMAC-SHA256, cut)."""
     return _mac(check_role_key(key), signed)
 
 
-def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
-    """Check the MAC under the named role's key, then parse; raise a ``WriteRejected`` if bad.
+def verify(
+    message: bytes | bytearray | memoryview, key: bytes, *, shared_robot_key: bool = False
+) -> Write:
+    """Check the MAC under the named writer's key, then parse; raise a ``WriteRejected`` if bad.
 
-    ``key`` is the site key (what a tag holds). Only the role bits of byte 1
-    are read before the MAC has verified, to pick the role key; a write whose
-    MAC fails, or whose role bits name no role, is ``ForgedWrite``. After
-    that, ``MalformedWrite`` for a bad version, reserved bits or field.
+    ``key`` is the site key (what a tag holds); ``shared_robot_key`` whether
+    the tag also takes robot writes under the legacy shared robot key. Only
+    the role bits of byte 1 and the writer id are read before the MAC has
+    verified, to pick the key; a write whose MAC fails, or whose role bits
+    name no role, is ``ForgedWrite``. After that, ``MalformedWrite`` for a
+    bad version, reserved bits or field.
     """
-    signed, role = authenticated(message, key)
+    signed, role = authenticated(message, key, shared_robot_key=shared_robot_key)
     version, flags = signed[0], signed[1]
     if version != WRITE_VERSION:
         raise MalformedWrite(f"write format version {version} is not supported (expected 1)")
@@ -201,14 +246,15 @@ def verify(message: bytes | bytearray | memoryview, key: bytes) -> Write:
 
 @dataclass
 class WriteSigner:
-    """A writer's side: signs changes with its id, role, role key and an increasing counter.
+    """A writer's side: signs changes with its id, role, key and an increasing counter.
 
-    ``key`` is the writer's role key, ``derive_role_key(site_key, role)``: a
-    writer never needs the site key, and a robot's key cannot sign an
-    operator's write. ``counter`` is the last counter used (-1: none yet);
-    persist it across restarts (the tags refuse any counter they have already
-    seen from this writer). Every argument is checked here, so a bad one fails
-    at set-up, not at the first write.
+    ``key`` is the writer's own key: ``derive_robot_key(site_key, writer)``
+    for a robot, ``derive_role_key(site_key, Role.OPERATOR)`` for an operator.
+    A writer never needs the site key; a robot's key signs neither an
+    operator's write nor another robot's. ``counter`` is the last counter
+    used (-1: none yet); persist it across restarts (the tags refuse any
+    counter they have already seen from this writer). Every argument is
+    checked here, so a bad one fails at set-up, not at the first write.
     """
 
     writer: int

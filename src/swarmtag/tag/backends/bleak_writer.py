@@ -6,8 +6,8 @@ One write is one connection (``BleakTagWriter.write``):
 2. read the state characteristic: the tag's marker id and fields now;
 3. reserve the writer's next counter in its ``CounterFile``, saved and
    fsynced **before** anything is sent (``swarmtag.tag.counter``);
-4. sign with ``WriteSigner`` (the role key, the writer id, that counter, the
-   marker read in 2) and write the 20 bytes to the write characteristic
+4. sign with ``WriteSigner`` (the writer's key, the writer id, that counter,
+   the marker read in 2) and write the 20 bytes to the write characteristic
    *with response*, so the tag's verdict comes back as the ATT result;
 5. read the state characteristic again: the new state, which confirms it.
 
@@ -54,7 +54,7 @@ from swarmtag.tag.backends.bleak import adapter_options, explain
 from swarmtag.tag.codec import COMPANY_ID, TagState, decode_manufacturer_data
 from swarmtag.tag.counter import CounterFile
 from swarmtag.tag.gatt import ATT_ERRORS, STATE_CHAR_UUID, WRITE_CHAR_UUID
-from swarmtag.tag.keys import read_role_key_file
+from swarmtag.tag.keys import read_writer_key_file
 from swarmtag.tag.lifecycle import Change, Role, check_role
 from swarmtag.tag.record import MAX_WRITERS
 from swarmtag.tag.write import WriteSigner
@@ -151,8 +151,10 @@ def _hint(kind: type[WriteRejected], writer: int, before: TagState | None) -> st
         MalformedWrite: "the tag could not parse the 20 bytes: its firmware and this swarmtag "
         "disagree on the write format (docs/hardware.md)",
         ForgedWrite: "the MAC does not verify: the key file is not derived from the site key "
-        "this tag holds (another site, or a rotated key?); a software tag on BlueZ older than "
-        "5.66 answers every refusal this way (docs/hardware.md section 5)",
+        f"this tag holds (another site, or a rotated key?), or is not writer {writer}'s (a robot "
+        "key signs only for its own writer id; the shared robot key only on tags set to accept "
+        "it); a software tag on BlueZ older than 5.66 answers every refusal this way "
+        "(docs/hardware.md section 5)",
         ReplayedWrite: f"the tag has already accepted this counter or a higher one from writer "
         f"{writer}: this counter file is behind (lost, copied or shared?); use the writer's own "
         "counter file, or a writer id of its own",
@@ -161,7 +163,7 @@ def _hint(kind: type[WriteRejected], writer: int, before: TagState | None) -> st
         RoleNotAllowed: "a robot may only change the status; urgency and destination need "
         "the operator key",
         IllegalTransition: "a robot may only lift (AWAITING_PICKUP -> PICKED_UP) or release "
-        f"(PICKED_UP -> IDLE){was}",
+        f"(PICKED_UP -> IDLE) a carrier it lifted itself{was}",
         WriterTableFull: f"the tag already tracks {MAX_WRITERS} writer ids and {writer} is new "
         "to it: use a writer id it knows, or rotate the site key and re-provision the tag",
     }
@@ -207,7 +209,7 @@ def refusal(
 
 
 class BleakTagWriter:
-    """Write to tags as one writer: its id, role and role key, and its counter file.
+    """Write to tags as one writer: its id, role and key, and its counter file.
 
     ``client_factory`` replaces ``bleak.BleakClient`` (called as
     ``client_factory(address, timeout=..., **adapter options)``); tests and
@@ -239,23 +241,32 @@ class BleakTagWriter:
         cls,
         path: str | os.PathLike[str],
         *,
-        writer: int,
         counters: CounterFile | str | os.PathLike[str],
+        writer: int | None = None,
         role: Role | None = None,
         **options: Any,  # noqa: ANN401 - timeout, adapter, client_factory
     ) -> BleakTagWriter:
-        """A writer with the role and key of the role key file ``path``.
+        """A writer with the role, key and writer id of the writer's key file ``path``.
 
-        ``role``, if given, must be the file's role (``ConfigError`` otherwise):
-        a robot's machine cannot end up signing as an operator by mistake.
+        A robot key file names its writer id: ``writer``, if given, must be it.
+        A role key file (operator, legacy shared robot key) names none:
+        ``writer`` is needed then. ``role``, if given, must be the file's role
+        (``ConfigError`` otherwise): a robot's machine cannot end up signing as
+        an operator by mistake.
         """
-        found, key = read_role_key_file(path)
-        if role is not None and check_role(role) is not found:
+        found = read_writer_key_file(path)
+        if role is not None and check_role(role) is not found.role:
             raise ConfigError(
                 f"role: {check_role(role).name.lower()} does not match the key file {path}, "
-                f"which holds the {found.name.lower()} key"
+                f"which holds the {found.role.name.lower()} key"
             )
-        return cls(writer=writer, role=found, key=key, counters=counters, **options)
+        return cls(
+            writer=found.writer_id(writer, path),
+            role=found.role,
+            key=found.key,
+            counters=counters,
+            **options,
+        )
 
     @property
     def writer(self) -> int:
