@@ -193,6 +193,7 @@ def test_the_report_opens_with_the_verdicts_and_warns_of_a_quick_run(tmp_path):
     assert html.count("underpowered (2 runs;") == 4
     assert "<summary><h2>controller-selection</h2>" in html
     assert "2 runs per condition (quick), 2 conditions</span></summary>" in html
+    assert "SPEC" not in html  # the report names docs pages, never a SPEC section (none ships)
 
     full = reproduce([study], out_dir=tmp_path / "full", workers=1)
     html = full.report.read_text(encoding="utf-8")

@@ -43,5 +43,13 @@ def tree_cmd(folder: Path | None) -> None:
     with plan.writing() as stage:
         click.echo(ascii_picture(tree), nl=False)
         if folder is not None:
-            for path in dot_picture(tree, stage.path(folder)):
-                click.echo(f"wrote {folder / path.name}", err=True)
+            written = [folder / path.name for path in dot_picture(tree, stage.path(folder))]
+            click.echo(_written_line(written), err=True)
+
+
+def _written_line(written: list[Path]) -> str:
+    """One line naming the files written, and why there is no PNG or SVG where there is none."""
+    names = ", ".join(map(str, written))
+    if any(path.suffix == ".png" for path in written):
+        return f"wrote {names}"
+    return f"wrote {names} only: PNG and SVG need Graphviz (its `dot` program on the PATH)"

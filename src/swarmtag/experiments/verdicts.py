@@ -203,10 +203,11 @@ def _tally(claims: Sequence[ClaimVerdict]) -> str:
 
 
 _RULES: Final = (
-    "Each row is a direction of SPEC §6 in one study, against the study's baseline; its parts "
-    "are the conditions (and swarm sizes) it covers, each shown as its difference "
-    "(condition - baseline; % and pp: relative to the baseline, pp its change from the "
-    "smallest to the largest swarm) with the 95 % bootstrap CI. Reproduced: every part has "
+    "Each row is a published direction (docs/reproduction.md) in one study, against the "
+    "study's baseline; its parts are the conditions (and swarm sizes) it covers, each "
+    "shown as its difference (condition - baseline; % and pp: relative to the baseline, "
+    "pp its change from the smallest to the largest swarm) with the 95 % bootstrap CI. "
+    "Reproduced: every part has "
     f"the claimed sign and a bootstrap p below {SIGNIFICANCE:g} (for 'close to the baseline': "
     f"the 95 % CI within \N{PLUS-MINUS SIGN}{CLOSE_MARGIN * 100:g} %). Not reproduced (sign "
     "only): every part has the claimed sign (or lies within the margin), not every part is "
@@ -220,7 +221,7 @@ def verdict_section(claims: Sequence[ClaimVerdict]) -> Section:
     """The report's first section: the tally, then one row group per claim, then the rules."""
     title = "Do the published findings reproduce?"
     if not claims:
-        note = "No published direction names these studies (SPEC §6 names the shipped five)."
+        note = "No published direction names these studies (they are judged in the shipped five)."
         return Section(title=title, paragraphs=[note])
     rules = f'<p class="note">{html.escape(_RULES)}</p>'
     return Section(title=title, paragraphs=[_tally(claims)], tables_html=[_table(claims), rules])
