@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy import stats
 
 from swarmtag.analysis import (
     ConditionRuns,
+    _kernels,
     censored_latencies,
     condition_kpis,
     condition_statistics,
@@ -16,9 +19,14 @@ from swarmtag.analysis import (
     run_values,
     summarize,
 )
+from swarmtag.analysis._kernels import numba_available, rank_targets
 from swarmtag.analysis.censoring import km_resampled_quantiles
-from swarmtag.analysis.resampling import condition_generator, iter_multiplicities
-from tests.io.strategies import log_from_rows
+from swarmtag.analysis.resampling import condition_generator, iter_multiplicities, multiplicities
+from tests.io.strategies import carrier_logs, log_from_rows
+
+needs_numba = pytest.mark.skipif(not numba_available(), reason="numba (the fast extra) is absent")
+ENGINES = [pytest.param(False, id="numpy"), pytest.param(True, id="compiled", marks=needs_numba)]
+"""Both implementations of the kernels: they must give the same bits."""
 
 # condition, run, carrier, urgency0, order, delivery (None = never); pickups 1 before delivery.
 #
@@ -96,7 +104,8 @@ def test_kaplan_meier_by_hand(runs):
     assert statistics.km_p95_latency.confidence_interval.low is None
 
 
-def test_kaplan_meier_is_scipys():
+@pytest.mark.parametrize("compiled", ENGINES)
+def test_kaplan_meier_is_scipys(compiled):
     rng = np.random.default_rng(7)
     values = rng.integers(0, 40, 300).astype(float)  # plenty of ties
     observed = rng.random(300) < 0.9
@@ -112,7 +121,7 @@ def test_kaplan_meier_is_scipys():
         expected = result.cdf.quantiles[np.argmax(result.cdf.probabilities >= q / 100 - 1e-9)]
         assert km_quantile(latencies, q) == expected
         ones = np.ones((1, runs.n_runs), dtype=np.int64)
-        assert km_resampled_quantiles(latencies, ones, q)[0] == expected
+        assert km_resampled_quantiles(latencies, ones, q, compiled=compiled)[0] == expected
 
 
 def _per_run(rows, ends):
@@ -139,10 +148,11 @@ def test_kaplan_meier_without_censoring_is_the_inverted_cdf_percentile():
     assert km_quantile(censored_latencies(runs), 95) == 20.0
 
 
-def test_weighted_resamples_are_the_estimator_on_the_replicated_sample(runs):
+@pytest.mark.parametrize("compiled", ENGINES)
+def test_weighted_resamples_are_the_estimator_on_the_replicated_sample(runs, compiled):
     latencies = censored_latencies(runs)
     weights = next(iter_multiplicities(condition_generator(0, "c"), 4, 50, width=11))
-    got = km_resampled_quantiles(latencies, weights, 50)
+    got = km_resampled_quantiles(latencies, weights, 50, compiled=compiled)
     by_run = [
         (latencies.values[latencies.runs == r], latencies.observed[latencies.runs == r])
         for r in range(4)
@@ -213,3 +223,76 @@ def test_pa_at_delivery_ranks_by_urgency_end():
     assert "pa_at_delivery" in document["conditions"][0]
     plain = summarize(log_from_rows(rows), n_resamples=50).to_json()
     assert "pa_at_delivery" not in plain["conditions"][0]
+
+
+def _scipy_km(values: np.ndarray, observed: np.ndarray, q: float) -> float | None:
+    cdf = stats.ecdf(stats.CensoredData(uncensored=values[observed], right=values[~observed])).cdf
+    reached = np.flatnonzero(cdf.probabilities >= q / 100 - 1e-9)
+    return float(cdf.quantiles[reached[0]]) if reached.size else None
+
+
+@settings(max_examples=60)
+@given(carrier_logs(conditions=("c",), max_runs=6), st.sampled_from([5, 50, 80, 95, 100]))
+def test_the_point_value_is_scipys_without_importing_it(log, q):
+    # With and without censoring, ties, everything censored: scipy.stats.ecdf's quantile.
+    latencies = censored_latencies(ConditionRuns.from_log(log, "c"))
+    assert km_quantile(latencies, q) == _scipy_km(latencies.values, latencies.observed, q)
+
+
+@pytest.mark.parametrize("compiled", ENGINES)
+@settings(max_examples=30)
+@given(
+    carrier_logs(conditions=("c",), max_runs=6),
+    st.integers(0, 2**32 - 1),
+    st.sampled_from([50, 90, 95]),
+)
+def test_resampled_kaplan_meier_is_scipys_on_each_replicated_sample(compiled, log, seed, q):
+    latencies = censored_latencies(ConditionRuns.from_log(log, "c"))
+    n_runs = int(latencies.runs.max()) + 1
+    weights = multiplicities(np.random.default_rng(seed).integers(0, n_runs, (12, n_runs)), n_runs)
+    got = km_resampled_quantiles(latencies, weights, q, compiled=compiled)
+    for row, value in zip(weights, got, strict=True):
+        counts = row[latencies.runs]
+        expected = _scipy_km(
+            np.repeat(latencies.values, counts), np.repeat(latencies.observed, counts), q
+        )
+        if expected is None:
+            assert np.isnan(value), row
+        else:
+            assert value == expected, row
+
+
+@pytest.mark.parametrize("compiled", ENGINES)
+@settings(max_examples=40)
+@given(carrier_logs(conditions=("c",), max_runs=8), st.integers(0, 2**32 - 1))
+def test_counting_deaths_decides_exactly_what_the_product_decides(compiled, log, seed):
+    # Where no censored value comes first, the KM CDF is deaths / n: the shortcut must agree
+    # with the product-limit estimate computed in full, resample by resample.
+    latencies = censored_latencies(ConditionRuns.from_log(log, "c"))
+    n_runs = int(latencies.runs.max()) + 1
+    weights = multiplicities(np.random.default_rng(seed).integers(0, n_runs, (40, n_runs)), n_runs)
+    for q in (20, 50, 95):
+        shortcut = km_resampled_quantiles(latencies, weights, q, compiled=compiled)
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(_kernels, "rank_targets", lambda totals, *_: np.full(totals.shape, -1))
+            product = km_resampled_quantiles(latencies, weights, q, compiled=compiled)
+        np.testing.assert_array_equal(shortcut, product)
+
+
+def test_counting_deaths_is_left_to_the_product_where_rounding_could_decide():
+    # level * n within rounding of an integer: the float product could fall either side.
+    level = 0.95 - 1e-9
+    targets = rank_targets(np.array([0, 1, 20, 21, 10**6]), level, 100)
+    assert targets.tolist() == [-1, 1, 19, 20, 950_000]
+    assert rank_targets(np.array([4, 5]), 0.5, 3).tolist() == [-1, 3]  # 2.0 exactly; 2.5
+    assert rank_targets(np.array([4, 5]), 0.0, 3).tolist() == [-1, -1]
+    assert rank_targets(np.array([4, 5]), float("nan"), 3).tolist() == [-1, -1]
+
+
+@pytest.mark.parametrize("compiled", ENGINES)
+def test_a_level_of_zero_is_reached_at_the_smallest_value(compiled, runs):
+    # The product-limit CDF is 0 >= 0 at the first distinct value, censored or not.
+    latencies = censored_latencies(runs)
+    weights = np.array([[1, 1, 1, 1], [0, 2, 0, 2]])
+    got = km_resampled_quantiles(latencies, weights, 1e-7, compiled=compiled)
+    assert got.tolist() == [latencies.values[0]] * 2

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmtag.analysis import (
@@ -220,3 +220,20 @@ def test_kpis_scale_to_a_hundred_thousand_runs():
             else np.nan
         )
         assert values.throughput[run] == pytest.approx(expected, nan_ok=True)
+
+
+@settings(max_examples=60)
+@given(carrier_logs())
+def test_the_kaplan_meier_p95_is_scipys(log):
+    from scipy import stats
+
+    for runs in split_conditions(log).values():
+        values = run_values(runs)
+        censored = values.censored
+        sample = stats.CensoredData(
+            uncensored=censored.values[censored.observed], right=censored.values[~censored.observed]
+        )
+        cdf = stats.ecdf(sample).cdf
+        reached = np.flatnonzero(cdf.probabilities >= 0.95 - 1e-9)
+        expected = float(cdf.quantiles[reached[0]]) if reached.size else None
+        assert condition_kpis(values).km_p95_latency == expected

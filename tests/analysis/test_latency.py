@@ -40,3 +40,18 @@ def test_interpolation_at_the_top_and_between():
     assert lower.tolist() == [0, 3, 5]
     assert upper.tolist() == [0, 4, 6]
     assert np.allclose(gamma, [0.0, 0.8, 0.7])
+
+
+@given(
+    st.lists(st.integers(1, 10**6), min_size=1, max_size=20),
+    st.lists(percent, min_size=1, max_size=25),
+)
+def test_many_percentiles_at_once_are_each_percentile_alone(counts, percentiles):
+    # Broadcasting sizes against percentiles does element by element what one percentile does.
+    sizes = np.asarray(counts, dtype=np.int64)
+    lower, upper, gamma = interpolation_points(sizes[:, None], np.asarray(percentiles, float))
+    for column, q in enumerate(percentiles):
+        one = interpolation_points(sizes, q)
+        np.testing.assert_array_equal(lower[:, column], one[0])
+        np.testing.assert_array_equal(upper[:, column], one[1])
+        np.testing.assert_array_equal(gamma[:, column], one[2])

@@ -1,13 +1,20 @@
-"""Resampling whole runs: multiplicities, exact re-pooled percentiles, seeded streams."""
+"""Resampling whole runs: multiplicities, exact re-pooled percentiles (numpy and compiled
+kernels alike), seeded streams."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from swarmtag.analysis import ConditionRuns, condition_seed_sequence, run_values
+from swarmtag.analysis._kernels import (
+    COMPILE_WORTH,
+    numba_available,
+    use_compiled,
+    weighted_positions,
+)
 from swarmtag.analysis.resampling import (
     condition_generator,
     iter_multiplicities,
@@ -15,6 +22,10 @@ from swarmtag.analysis.resampling import (
     resampled_percentiles,
 )
 from tests.io.strategies import carrier_logs
+
+needs_numba = pytest.mark.skipif(not numba_available(), reason="numba (the fast extra) is absent")
+ENGINES = [pytest.param(False, id="numpy"), pytest.param(True, id="compiled", marks=needs_numba)]
+"""Both implementations of the kernels: they must give the same bits."""
 
 
 def test_multiplicities_count_draws():
@@ -30,8 +41,9 @@ def test_multiplicity_rows_sum_to_the_number_of_runs(n_runs, n_resamples, seed):
     assert (counts.sum(axis=1) == n_runs).all()
 
 
+@pytest.mark.parametrize("compiled", ENGINES)
 @given(carrier_logs(conditions=("c",), max_runs=8), st.integers(0, 2**32 - 1))
-def test_repooled_percentiles_equal_numpy_on_concatenated_resamples(log, seed):
+def test_repooled_percentiles_equal_numpy_on_concatenated_resamples(compiled, log, seed):
     """The fast weighted order statistics against the slow, obvious reference."""
     values = run_values(ConditionRuns.from_log(log, "c"))
     latencies = values.latencies
@@ -39,7 +51,11 @@ def test_repooled_percentiles_equal_numpy_on_concatenated_resamples(log, seed):
     draws = rng.integers(0, values.n_runs, size=(30, values.n_runs))
     percentiles = [95, 0, 2.5, 50, 97.5, 100, 33.3]
     fast = resampled_percentiles(
-        latencies.values, latencies.runs, multiplicities(draws, values.n_runs), percentiles
+        latencies.values,
+        latencies.runs,
+        multiplicities(draws, values.n_runs),
+        percentiles,
+        compiled=compiled,
     )
     per_run = [latencies.values[latencies.runs == run] for run in range(values.n_runs)]
     for row, drawn in enumerate(draws):
@@ -77,3 +93,101 @@ def test_spawn_key_is_pinned(name, key):
     # The first 8 bytes of SHA-256 of the name, little-endian. Pinned: changing the keying would
     # silently change every published confidence interval.
     assert condition_seed_sequence(0, name).spawn_key == (key,)
+
+
+def _explicit_percentiles(
+    values: np.ndarray, groups: np.ndarray, weights: np.ndarray, percentiles: list[float]
+) -> np.ndarray:
+    """The obvious reference: build each resample's pooled sample and ask numpy."""
+    result = np.full((len(weights), len(percentiles)), np.nan)
+    for row, counts in enumerate(weights):
+        sample = np.repeat(values, counts[groups])
+        if sample.size:
+            result[row] = np.percentile(sample, percentiles)
+    return result
+
+
+@pytest.mark.parametrize("compiled", ENGINES)
+@settings(max_examples=60)
+@given(
+    st.lists(st.integers(0, 12), min_size=1, max_size=40),
+    st.integers(1, 7),
+    st.lists(st.floats(0, 100), max_size=6),
+    st.integers(0, 2**32 - 1),
+)
+def test_both_kernels_give_numpys_percentiles_with_ties_and_empty_resamples(
+    compiled, sample, n_runs, extra, seed
+):
+    rng = np.random.default_rng(seed)
+    values = np.sort(np.asarray(sample, dtype=np.float64))  # integers: plenty of ties
+    groups = rng.integers(0, n_runs, values.size)
+    weights = rng.integers(0, 4, size=(25, n_runs)) * (rng.random((25, n_runs)) < 0.6)
+    weights[0] = 0  # an empty resample
+    percentiles = [95, 0, 100, 50, 2.5, 97.5, *extra]
+    got = resampled_percentiles(values, groups, weights, percentiles, compiled=compiled)
+    expected = _explicit_percentiles(values, groups, weights, percentiles)
+    np.testing.assert_array_equal(got, expected)
+    assert np.isnan(got[0]).all()
+
+
+@pytest.mark.parametrize("compiled", ENGINES)
+def test_percentiles_go_into_a_strided_view(compiled):
+    rng = np.random.default_rng(4)
+    values = np.sort(rng.exponential(30.0, 200))
+    groups = rng.integers(0, 20, 200)
+    weights = multiplicities(rng.integers(0, 20, size=(300, 20)), 20)
+    percentiles = [95, *range(0, 101, 5)]
+    whole = resampled_percentiles(values, groups, weights, percentiles, compiled=compiled)
+    rows = np.full((len(percentiles), 400), -1.0)
+    out = rows[:, 50:350].T  # columns of a (Q, B) array, as the bootstrap keeps its curves
+    returned = resampled_percentiles(
+        values, groups, weights, percentiles, compiled=compiled, out=out
+    )
+    assert returned is out
+    np.testing.assert_array_equal(out, whole)
+    assert (rows[:, :50] == -1.0).all()
+    assert (rows[:, 350:] == -1.0).all()
+    np.testing.assert_array_equal(
+        whole, _explicit_percentiles(values, groups, weights, percentiles)
+    )
+
+
+@given(
+    st.lists(st.integers(0, 5), min_size=1, max_size=30),
+    st.integers(0, 2**32 - 1),
+)
+def test_weighted_positions_are_the_first_cumulative_weight_above_the_rank(run_of, seed):
+    rng = np.random.default_rng(seed)
+    groups = np.asarray(run_of)
+    weights = rng.integers(0, 3, size=(12, 6))
+    weights[:, groups[0]] += 1  # every row holds something
+    totals = weights[:, groups].sum(axis=1)
+    ranks = (rng.random((12, 5)) * totals[:, None]).astype(np.int64)
+    got = weighted_positions(groups, weights, ranks)
+    for row in range(12):
+        cumulative = np.cumsum(weights[row, groups])
+        expected = [int(np.argmax(cumulative > rank)) for rank in ranks[row]]
+        assert got[row].tolist() == expected
+        pooled = np.repeat(np.arange(groups.size), weights[row, groups])  # the pooled sample
+        assert got[row].tolist() == pooled[ranks[row]].tolist()
+
+
+def test_the_compiled_kernels_run_only_where_they_pay():
+    assert use_compiled(10) is False
+    if numba_available():
+        assert use_compiled(COMPILE_WORTH) is True
+    else:
+        assert use_compiled(10**12) is False
+
+
+@pytest.mark.parametrize("compiled", ENGINES)
+@given(st.integers(1, 50), st.integers(1, 40), st.integers(0, 2**32 - 1))
+def test_both_ways_of_counting_draws_agree(compiled, n_runs, n_resamples, seed):
+    draws = np.random.default_rng(seed).integers(0, n_runs, size=(n_resamples, n_runs))
+    expected = [np.bincount(row, minlength=n_runs).tolist() for row in draws]
+    assert multiplicities(draws, n_runs, compiled=compiled).tolist() == expected
+    chunks = iter_multiplicities(
+        condition_generator(seed, "c"), n_runs, n_resamples, width=n_runs, compiled=compiled
+    )
+    plain = iter_multiplicities(condition_generator(seed, "c"), n_runs, n_resamples, width=n_runs)
+    np.testing.assert_array_equal(np.vstack(list(chunks)), np.vstack(list(plain)))

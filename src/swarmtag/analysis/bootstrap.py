@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmtag._resources import check_memory
+from swarmtag.analysis._kernels import use_compiled
 from swarmtag.analysis._validation import check_options
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS
 from swarmtag.analysis.censoring import km_resampled_quantiles
@@ -50,6 +51,7 @@ __all__ = [
     "ConditionStatistics",
     "ConfidenceInterval",
     "Estimate",
+    "bootstrap_work",
     "condition_statistics",
     "percentile_interval",
 ]
@@ -145,6 +147,15 @@ def _ratio(numerator: NDArray[np.float64], denominator: NDArray[np.float64]) -> 
     return out
 
 
+def bootstrap_work(n_resamples: int, runs: ConditionRuns) -> int:
+    """Resamples x values the bootstrap of a condition walks: what ``use_compiled`` weighs.
+
+    Each resample walks the delivered latencies once and every carrier's
+    censoring-aware value twice (its P95, its Kaplan-Meier crossing).
+    """
+    return n_resamples * (int(np.count_nonzero(runs.delivered)) + 2 * len(runs.carrier))
+
+
 def _replicates(
     values: RunValues,
     *,
@@ -153,6 +164,8 @@ def _replicates(
     curve_thresholds: Sequence[int],
     curve_percentiles: Sequence[float],
     chunk_elements: int,
+    km: bool = True,
+    compiled: bool | None = None,
 ) -> tuple[dict[str, NDArray[np.float64]], NDArray[np.float64], NDArray[np.float64]]:
     """Bootstrap values of every metric ``(B,)``, of the PA curve and of the latency curve.
 
@@ -160,6 +173,13 @@ def _replicates(
     each point's ``B`` values are contiguous for its band. Resamples are
     drawn and evaluated chunk by chunk (``iter_multiplicities``): only the
     ``B`` values per figure are ever stored, each exactly once.
+
+    Percentiles and Kaplan-Meier quantiles come from the once-sorted values
+    and each resample's run multiplicities (``swarmtag.analysis._kernels``:
+    numpy, or compiled where ``compiled`` or ``use_compiled`` says so; the
+    same numbers either way). Without ``km`` (the condition's own KM curve
+    never reaches 0.95, so the bootstrap reports its KM P95 undefined) the
+    Kaplan-Meier values are left NaN and not computed.
 
     Columns of the per-run sums: latency sum, deliveries, throughput and
     whether defined, PA, censored latency sum, carriers, PA at delivery and
@@ -187,9 +207,16 @@ def _replicates(
     names = METRICS + OPTIONAL_METRICS
     metrics = [np.empty(n_resamples) for _ in names]  # one array each: kept, never copied
     pa_curve = np.empty((len(curve_thresholds), n_resamples))
-    latency_curve = np.empty((len(curve_percentiles), n_resamples))
+    # Row 0: the P95 (copied to its own array at the end), then the latency curve's points;
+    # the percentiles are written straight into these rows, chunk by chunk.
+    pooled = np.empty((len(percentiles), n_resamples))
     latencies = values.latencies
     censored = values.censored
+    uncensored = np.array_equal(censored.values, latencies.values) and np.array_equal(
+        censored.runs, latencies.runs
+    )
+    if compiled is None:  # as bootstrap_work counts
+        compiled = use_compiled(n_resamples * (latencies.values.size + 2 * censored.values.size))
     rng = condition_generator(seed, values.condition)
     chunks = iter_multiplicities(
         rng,
@@ -197,30 +224,45 @@ def _replicates(
         n_resamples,
         width=max(n_runs, latencies.values.size, censored.values.size),
         chunk_elements=chunk_elements,
+        compiled=compiled,
     )
     start = 0
     for weights in chunks:
         stop = start + len(weights)
         sums = weights.astype(np.float64) @ per_run
-        pooled = resampled_percentiles(latencies.values, latencies.runs, weights, percentiles)
-        metrics[0][start:stop] = pooled[:, 0]
+        resampled_percentiles(
+            latencies.values,
+            latencies.runs,
+            weights,
+            percentiles,
+            compiled=compiled,
+            out=pooled[:, start:stop].T,
+        )
         metrics[1][start:stop] = _ratio(sums[:, 0], sums[:, 1])
         metrics[2][start:stop] = _ratio(sums[:, 2], sums[:, 3])
         metrics[3][start:stop] = sums[:, 4] / n_runs
         metrics[4][start:stop] = sums[:, 1] / n_runs
-        metrics[5][start:stop] = resampled_percentiles(
-            censored.values, censored.runs, weights, [95]
-        )[:, 0]
+        metrics[5][start:stop] = (
+            pooled[0, start:stop]  # every carrier delivered: the same values, the same P95
+            if uncensored
+            else resampled_percentiles(
+                censored.values, censored.runs, weights, [95], compiled=compiled
+            )[:, 0]
+        )
         metrics[6][start:stop] = _ratio(sums[:, 5], sums[:, 6])
-        metrics[7][start:stop] = km_resampled_quantiles(censored, weights, 95)
+        # Evaluated for every chunk, on no resample where the figure is undefined outright.
+        km_values = km_resampled_quantiles(
+            censored, weights if km else weights[:0], 95, compiled=compiled
+        )
+        metrics[7][start:stop] = km_values if km else np.nan
         metrics[8][start:stop] = _ratio(sums[:, 7], sums[:, 8])
         pa_curve[:, start:stop] = (sums[:, 9:] / n_runs).T
-        latency_curve[:, start:stop] = pooled[:, 1:].T
         start = stop
+    metrics[0][:] = pooled[0]
     for replicate in metrics:
         replicate.flags.writeable = False
     by_metric = dict(zip(names, metrics, strict=True))
-    return by_metric, pa_curve.T, latency_curve.T
+    return by_metric, pa_curve.T, pooled[1:].T
 
 
 def condition_statistics(
@@ -231,12 +273,16 @@ def condition_statistics(
     confidence_level: float = 0.95,
     curve_thresholds: Sequence[int] = CURVE_THRESHOLDS,
     curve_percentiles: Sequence[float] = LATENCY_PERCENTILES,
+    compiled: bool | None = None,
     _chunk_elements: int = CHUNK_ELEMENTS,
 ) -> ConditionStatistics:
     """KPIs of one condition with bootstrap-over-runs intervals, and its curves with bands.
 
     The resamples come from a generator keyed by ``seed`` and the condition's
     name, so they do not depend on which other conditions are analysed.
+    ``compiled``: evaluate them with the compiled kernels (numba, the
+    ``fast`` extra) or numpy; ``None`` picks the compiled ones where numba is
+    installed and the work pays for loading them. Same numbers either way.
 
     >>> from swarmtag.io import CarrierLog
     >>> log = CarrierLog(condition=["c"] * 4, run=[0, 1, 2, 3], seed=[0] * 4, carrier=[1] * 4,
@@ -274,6 +320,7 @@ def condition_statistics(
         curve_thresholds=curve_thresholds,
         curve_percentiles=curve_percentiles,
         chunk_elements=_chunk_elements,
+        compiled=compiled,
     )
 
 
@@ -286,8 +333,13 @@ def _statistics(
     curve_thresholds: Sequence[int] = CURVE_THRESHOLDS,
     curve_percentiles: Sequence[float] = LATENCY_PERCENTILES,
     chunk_elements: int = CHUNK_ELEMENTS,
+    compiled: bool | None = None,
 ) -> ConditionStatistics:
-    """``condition_statistics`` without its checks: for callers that checked (``summarize``)."""
+    """``condition_statistics`` without its checks: for callers that checked (``summarize``).
+
+    ``compiled``: run the compiled kernels (``swarmtag.analysis._kernels``),
+    or not; ``None`` decides from this condition's work alone.
+    """
     values = run_values(runs, curve_thresholds=curve_thresholds)
     kpis = condition_kpis(values)
     replicates, pa_replicates, latency_replicates = _replicates(
@@ -297,11 +349,9 @@ def _statistics(
         curve_thresholds=curve_thresholds,
         curve_percentiles=curve_percentiles,
         chunk_elements=chunk_elements,
+        km=kpis.km_p95_latency is not None,  # else undefined outright: no value computed
+        compiled=compiled,
     )
-    if kpis.km_p95_latency is None:  # the condition's own KM curve never reaches 0.95
-        undefined = np.full(n_resamples, np.nan)
-        undefined.flags.writeable = False
-        replicates["km_p95_latency"] = undefined
     estimates = {
         metric: Estimate(
             value=kpis.value(metric),

@@ -10,22 +10,24 @@ delivery; 0 if it recorded none), which is earlier than the true end and so
 gives a weaker lower bound.
 
 The Kaplan-Meier quantile treats the same values as right-censored
-observations. Its point value comes from ``scipy.stats.ecdf`` on
-``scipy.stats.CensoredData``; its bootstrap values (one per resample of
-runs) from the same product-limit formula evaluated with run multiplicities
-as weights, vectorised over resamples. Integer weights make the two agree
-bit for bit (tested): a resample is the estimator on the replicated sample.
+observations. Its point value is that of ``scipy.stats.ecdf`` on
+``scipy.stats.CensoredData``, computed with scipy's own operations in numpy
+(scipy.stats is not imported for it); its bootstrap values (one per resample
+of runs) come from the same product-limit formula evaluated with run
+multiplicities as weights (``swarmtag.analysis._kernels``). Integer weights
+make the two agree bit for bit (tested): a resample is the estimator on the
+replicated sample.
 """
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag.analysis._kernels import km_reached
 from swarmtag.analysis.latency import SortedLatencies
 from swarmtag.analysis.runs import ConditionRuns
 
@@ -121,12 +123,33 @@ def censored_latencies(runs: ConditionRuns) -> CensoredLatencies:
     )
 
 
+def _km_cdf(
+    values: NDArray[np.float64], observed: NDArray[np.bool_]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The distinct values of a sorted sample and the Kaplan-Meier CDF at each, as scipy's ecdf.
+
+    Without censoring scipy takes the empirical CDF (events / n); with it, the
+    product-limit estimate ``1 - cumprod((n - d) / n)`` over every distinct
+    value. The same operations in the same order give the same bits, without
+    importing scipy.stats (a second or so).
+    """
+    distinct, first, counts = np.unique(values, return_index=True, return_counts=True)
+    if observed.all():
+        return distinct, np.cumsum(counts) / np.float64(values.size)
+    at_risk = values.size - first
+    deaths = np.add.reduceat(observed.astype(np.int64), first)
+    survival = np.cumprod((at_risk - deaths) / at_risk, dtype=np.float64)
+    return distinct, 1 - survival
+
+
 def km_quantile(latencies: CensoredLatencies, q: float = 95) -> float | None:
     """The ``q``-th percentile of the Kaplan-Meier latency distribution; ``None`` if never reached.
 
     The quantile is the smallest latency at which the estimated CDF reaches
     ``q / 100`` (a step function: no interpolation). With no undelivered
-    carrier it is numpy's ``inverted_cdf`` percentile of the latencies.
+    carrier it is numpy's ``inverted_cdf`` percentile of the latencies. The
+    CDF is ``scipy.stats.ecdf``'s on ``scipy.stats.CensoredData``, bit for
+    bit (tested), computed here in numpy.
 
     >>> from swarmtag.io import CarrierLog
     >>> nan = float("nan")
@@ -137,40 +160,41 @@ def km_quantile(latencies: CensoredLatencies, q: float = 95) -> float | None:
     >>> km_quantile(latencies, 50), km_quantile(latencies, 95) is None
     (7.0, True)
     """
-    # scipy.stats takes a while to import (and ships no stubs): load it when needed.
-    stats = importlib.import_module("scipy.stats")
-    observed = latencies.observed
-    sample = stats.CensoredData(
-        uncensored=latencies.values[observed], right=latencies.values[~observed]
-    )
-    cdf = stats.ecdf(sample).cdf
-    reached = np.flatnonzero(np.asarray(cdf.probabilities) >= q / 100 - KM_TOLERANCE)
-    return float(cdf.quantiles[reached[0]]) if reached.size else None
+    values = latencies.values
+    if values.size == 0:
+        return None
+    distinct, cdf = _km_cdf(values, latencies.observed)
+    reached = np.flatnonzero(cdf >= q / 100 - KM_TOLERANCE)
+    return float(distinct[reached[0]]) if reached.size else None
 
 
 def km_resampled_quantiles(
-    latencies: CensoredLatencies, weights: NDArray[np.int64], q: float = 95
+    latencies: CensoredLatencies,
+    weights: NDArray[np.int64],
+    q: float = 95,
+    *,
+    compiled: bool | None = None,
 ) -> NDArray[np.float64]:
     """``km_quantile`` of each resample, ``(B,)``; NaN where its KM curve never reaches ``q``.
 
     ``weights`` is ``(B, R)``: how often each run is in each resample. The
     product-limit estimate runs over the sample's distinct values with
-    weighted counts at risk and weighted deliveries, exactly as
-    ``scipy.stats.ecdf`` does on the replicated sample.
+    weighted counts at risk and weighted deaths, exactly as
+    ``scipy.stats.ecdf`` does on the replicated sample (numpy or compiled,
+    ``compiled``: see ``swarmtag.analysis._kernels``).
     """
     values = latencies.values
     result = np.full(weights.shape[0], np.nan)
-    if values.size == 0:
+    if values.size == 0 or weights.shape[0] == 0:
         return result
-    distinct, first = np.unique(values, return_index=True)
-    last = np.append(first[1:], values.size) - 1
-    counts = weights[:, latencies.runs]
-    at_risk = np.cumsum(counts[:, ::-1], axis=1)[:, ::-1][:, first]  # weight at or after each
-    counts *= latencies.observed
-    deaths = np.diff(np.cumsum(counts, axis=1)[:, last], axis=1, prepend=0)
-    # (n - d) / n as scipy computes it; a factor of exactly 1 where nothing is left at risk.
-    ratio = (at_risk - deaths) / np.maximum(at_risk, 1) + (at_risk == 0)
-    reached = 1 - np.cumprod(ratio, axis=1) >= q / 100 - KM_TOLERANCE
-    hit = reached.any(axis=1)
-    result[hit] = distinct[reached[hit].argmax(axis=1)]
+    found = km_reached(
+        values,
+        latencies.runs,
+        latencies.observed,
+        weights,
+        q / 100 - KM_TOLERANCE,
+        compiled=compiled,
+    )
+    hit = found >= 0
+    result[hit] = values[found[hit]]
     return result

@@ -29,15 +29,17 @@ __all__ = [
 
 
 def interpolation_points(
-    counts: NDArray[np.int64], q: float
+    counts: NDArray[np.int64], q: float | NDArray[np.float64]
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
     """Lower and upper order-statistic indices and the weight between them, as numpy does.
 
     For each sample size ``n >= 1`` in ``counts``: position ``(n - 1) * q/100``,
     its floor, the next index (both clipped to ``n - 1``), and the fraction.
+    ``counts`` and an array of percentiles ``q`` broadcast (``counts[:, None]``
+    and ``q`` give one column per percentile), element by element the same.
     """
-    fraction_of_one = np.true_divide(q, 100)
-    virtual = (counts - 1) * fraction_of_one
+    fraction_of_one = np.true_divide(q, 100, dtype=np.float64)
+    virtual = np.multiply(counts - 1, fraction_of_one, dtype=np.float64)
     lower = np.floor(virtual)
     gamma = virtual - lower
     lower_index = lower.astype(np.int64)

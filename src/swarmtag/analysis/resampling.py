@@ -36,14 +36,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag._interrupt import checkpoint
+from swarmtag.analysis._kernels import PERCENTILE_ROWS, count_draws, weighted_percentiles
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS
 from swarmtag.analysis.curves import LATENCY_PERCENTILES
 from swarmtag.analysis.kpis import METRICS, OPTIONAL_METRICS
-from swarmtag.analysis.latency import interpolation_points, lerp
 
 __all__ = [
     "CHUNK_ELEMENTS",
+    "PERCENTILE_ROWS",
     "PER_VALUE_ARRAYS",
+    "ROW_VALUES",
     "WORKING_ARRAYS",
     "bootstrap_memory",
     "condition_generator",
@@ -60,10 +62,14 @@ A chunk of this size takes well under a second, so an interrupt is handled
 promptly. Do not change it: the chunk sizes are part of the results' last
 bits (see the module docstring).
 """
-WORKING_ARRAYS: Final = 12
-"""Most chunk-sized arrays alive at once while one chunk is evaluated (measured: 3 to 8)."""
-PER_VALUE_ARRAYS: Final = 32
-"""Float64 arrays per carrier (log row) of a condition: its per-run values, sorted latencies."""
+WORKING_ARRAYS: Final = 3
+"""Most chunk-sized arrays alive at once while one chunk is evaluated: the run multiplicities
+as drawn, counted and as floats (measured on the example trial: 0.9 to 1.9)."""
+ROW_VALUES: Final = 8
+"""Values per resample of a chunk beyond its figures and curve points (totals, masks)."""
+PER_VALUE_ARRAYS: Final = 80
+"""Float64 arrays per carrier (log row) of a condition: its per-run values, its sorted values
+and the kernels' copies of them (measured: about 60, at 10 resamples of the example trial)."""
 _FLOAT: Final = 8
 """Bytes of one float64 bootstrap value."""
 _PERCENTILE_TEMPORARIES: Final = 3
@@ -93,28 +99,35 @@ def bootstrap_memory(
     Kept to the end: ``B`` float64 values per metric of every condition and of
     every comparison (the percentile CIs and p-values need them all). On top
     of these come, at one time, either the last condition's curve values or
-    the comparisons' differences; a percentile's temporaries; one chunk of at
+    the comparisons' differences; a percentile's temporaries; one chunk: at
     most ``WORKING_ARRAYS`` arrays of ``CHUNK_ELEMENTS`` values (or of
-    ``width``, if one resample is wider); and the per-carrier bookkeeping.
-    Not counted: the interpreter and libraries (scipy.stats, loaded on first
-    use, takes about 85 MiB), which every command pays whatever it asks::
+    ``width``, if one resample is wider), or, where resamples are narrow and
+    a chunk holds many of them, ``M + K + ROW_VALUES`` values per resample
+    of the chunk (its sums and percentiles), whichever is more; and the
+    per-carrier bookkeeping. Not counted: the interpreter and libraries
+    (scipy.stats, loaded on first use, takes about 85 MiB; numba, where the
+    compiled kernels run, some more) and a few MiB of fixed bookkeeping
+    (``PERCENTILE_ROWS``), which every command pays whatever it asks::
 
         8 * B * (C * M + max(K, P * M) + 3)
-          + 8 * WORKING_ARRAYS * min(B * width, max(CHUNK_ELEMENTS, width))
+          + 8 * max(WORKING_ARRAYS * min(B * width, max(CHUNK_ELEMENTS, width)),
+                    (M + K + ROW_VALUES) * min(B, CHUNK_ELEMENTS // width))
           + 8 * PER_VALUE_ARRAYS * C * width
 
     >>> from swarmtag._resources import format_bytes
     >>> format_bytes(bootstrap_memory(1_000_000_000, conditions=3, width=100))
-    '529.4 GiB'
+    '529.1 GiB'
     >>> format_bytes(bootstrap_memory(10_000, conditions=2, width=100))
-    '96.3 MiB'
+    '27.7 MiB'
     """
     others = conditions - 1 if comparisons is None else comparisons
     kept = conditions * metrics
     transient = max(curve_points, others * metrics) + _PERCENTILE_TEMPORARIES
     chunk = min(n_resamples * width, max(CHUNK_ELEMENTS, width))
+    rows = min(n_resamples, max(1, CHUNK_ELEMENTS // max(1, width)))  # resamples in a chunk
+    working = max(WORKING_ARRAYS * chunk, (metrics + curve_points + ROW_VALUES) * rows)
     bookkeeping = PER_VALUE_ARRAYS * conditions * width
-    per_request = n_resamples * (kept + transient) + WORKING_ARRAYS * chunk + bookkeeping
+    per_request = n_resamples * (kept + transient) + working + bookkeeping
     return _FLOAT * per_request
 
 
@@ -134,17 +147,24 @@ def condition_generator(seed: int, condition: str) -> np.random.Generator:
     return np.random.default_rng(condition_seed_sequence(seed, condition))
 
 
-def multiplicities(draws: NDArray[np.int64], n_runs: int) -> NDArray[np.int64]:
+def multiplicities(
+    draws: NDArray[np.int64], n_runs: int, *, compiled: bool = False
+) -> NDArray[np.int64]:
     """How often each run appears in each resample: ``(B, R)`` draws to ``(B, R)`` counts.
+
+    ``compiled`` counts with the compiled kernels (numba), a pass instead of
+    a ``bincount`` over shifted copies: the same integers.
 
     >>> multiplicities(np.array([[0, 0, 2], [1, 2, 0]]), 3)
     array([[2, 0, 1],
            [1, 1, 1]])
     """
+    if compiled:
+        return count_draws(draws, n_runs)
     n_resamples = draws.shape[0]
     flat = (draws + n_runs * np.arange(n_resamples, dtype=np.int64)[:, None]).ravel()
     counts = np.bincount(flat, minlength=n_resamples * n_runs)
-    return counts.reshape(n_resamples, n_runs).astype(np.int64)
+    return counts.reshape(n_resamples, n_runs).astype(np.int64, copy=False)
 
 
 def iter_multiplicities(
@@ -154,6 +174,7 @@ def iter_multiplicities(
     *,
     width: int,
     chunk_elements: int = CHUNK_ELEMENTS,
+    compiled: bool = False,
 ) -> Iterator[NDArray[np.int64]]:
     """Multiplicity rows for ``n_resamples`` resamples of ``n_runs`` runs, in chunks.
 
@@ -161,14 +182,15 @@ def iter_multiplicities(
     is the widest per-resample array the caller builds. The draws are the
     same whatever the chunk size: the generator hands out one stream (the
     default ``int64`` dtype; the 8- and 16-bit ones would not, see the
-    module docstring).
+    module docstring). ``compiled``: count them as ``multiplicities`` does.
     """
     rows = max(1, min(n_resamples, chunk_elements // max(1, width, n_runs)))
     done = 0
     while done < n_resamples:
         checkpoint()  # a Ctrl-C that numpy swallowed in the last chunk ends the bootstrap here
         take = min(rows, n_resamples - done)
-        yield multiplicities(rng.integers(0, n_runs, size=(take, n_runs)), n_runs)
+        draws = rng.integers(0, n_runs, size=(take, n_runs))
+        yield multiplicities(draws, n_runs, compiled=compiled)
         done += take
 
 
@@ -177,11 +199,19 @@ def resampled_percentiles(
     groups: NDArray[np.intp],
     weights: NDArray[np.int64],
     percentiles: Sequence[float],
+    *,
+    compiled: bool | None = None,
+    out: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """Percentiles of each resample's pooled values: ``(B, Q)``, NaN where a resample is empty.
 
     ``values`` are sorted ascending and ``groups`` give each value's run;
-    ``weights`` is ``(B, R)``: how often each run is in each resample.
+    ``weights`` is ``(B, R)``: how often each run is in each resample. Each
+    resample's size gives numpy's two order-statistic ranks and weight per
+    percentile (``latency.interpolation_points``), found in the once-sorted
+    values, numpy or compiled (``compiled``, see ``swarmtag.analysis._kernels``:
+    the same bits either way). ``out``, a ``(B, Q)`` array (a strided view
+    will do), receives the result.
 
     >>> values, groups = np.array([1.0, 2.0, 4.0]), np.array([0, 1, 0])
     >>> resampled_percentiles(values, groups, np.array([[2, 0], [0, 2], [1, 1]]), [50])
@@ -189,26 +219,6 @@ def resampled_percentiles(
            [2. ],
            [2. ]])
     """
-    n_resamples = weights.shape[0]
-    result = np.full((n_resamples, len(percentiles)), np.nan)
-    if values.size == 0:
-        return result
-    cumulative = np.cumsum(weights[:, groups], axis=1)
-    totals = cumulative[:, -1].copy()
-    filled = np.flatnonzero(totals > 0)
-    if filled.size == 0:
-        return result
-    # One sorted search over all rows: shift row b by b * stride so rows never overlap.
-    stride = int(totals.max()) + 1
-    shift = np.arange(n_resamples, dtype=np.int64) * stride
-    cumulative += shift[:, None]
-    flat = cumulative.ravel()
-    counts = totals[filled]
-    row_shift = shift[filled]
-    row_base = filled * values.size
-    for column, q in enumerate(percentiles):
-        lower, upper, gamma = interpolation_points(counts, q)
-        low_at = np.searchsorted(flat, lower + row_shift, side="right") - row_base
-        high_at = np.searchsorted(flat, upper + row_shift, side="right") - row_base
-        result[filled, column] = lerp(values[low_at], values[high_at], gamma)
+    result = np.empty((weights.shape[0], len(percentiles))) if out is None else out
+    weighted_percentiles(values, groups, weights, percentiles, out=result, compiled=compiled)
     return result

@@ -15,8 +15,14 @@ from dataclasses import dataclass
 from typing import Final
 
 from swarmtag._resources import check_memory
+from swarmtag.analysis._kernels import use_compiled
 from swarmtag.analysis._validation import check_options
-from swarmtag.analysis.bootstrap import ConditionStatistics, Estimate, _statistics
+from swarmtag.analysis.bootstrap import (
+    ConditionStatistics,
+    Estimate,
+    _statistics,
+    bootstrap_work,
+)
 from swarmtag.analysis.compare import Comparison, compare_all
 from swarmtag.analysis.kpis import CORE_METRICS
 from swarmtag.analysis.resampling import bootstrap_memory
@@ -143,8 +149,14 @@ def summarize(
     n_resamples: int = 10_000,
     seed: int = 0,
     confidence_level: float = 0.95,
+    compiled: bool | None = None,
 ) -> MetricsReport:
     """KPIs with bootstrap intervals for every condition, and differences from the baseline.
+
+    ``compiled``: evaluate the resamples with the compiled kernels (numba, the
+    ``fast`` extra) or numpy; ``None`` picks the compiled ones where numba is
+    installed and the work, all conditions together, pays for loading them.
+    Same numbers either way.
 
     >>> from swarmtag.io import CarrierLog
     >>> log = CarrierLog(condition=["proximity", "urgency:alpha=3.0"], run=[0, 0], seed=[0, 0],
@@ -168,9 +180,15 @@ def summarize(
         width=max(len(runs.carrier) for runs in groups.values()),
     )
     check_memory(f"--resamples {n_resamples} over {_conditions(len(order))}", estimate)
+    if compiled is None:  # one choice for all: loading the compiled kernels pays off on the sum
+        compiled = use_compiled(sum(bootstrap_work(n_resamples, runs) for runs in groups.values()))
     statistics = {
         name: _statistics(
-            groups[name], n_resamples=n_resamples, seed=seed, confidence_level=confidence_level
+            groups[name],
+            n_resamples=n_resamples,
+            seed=seed,
+            confidence_level=confidence_level,
+            compiled=compiled,
         )
         for name in order
     }
