@@ -265,6 +265,9 @@ def test_few_runs_mark_every_bootstrap_ci_and_p_underpowered(capsys, runs, weak)
     assert ("\N{DOUBLE DAGGER}" in out) is weak
     if weak:
         assert "smallest possible p here is 0.1" in out
+        # every comparison underpowered: the mark heads the CI and bootstrap p columns once
+        assert "Difference [95 % CI] \N{DOUBLE DAGGER}" in out
+        assert "p (bootstrap) \N{DOUBLE DAGGER}" in out
 
 
 THREE = ("--condition", "proximity", "--condition", "urgency:alpha=0.7",

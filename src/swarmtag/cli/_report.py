@@ -291,9 +291,12 @@ def _value_grid(report: MetricsReport, shown: ShownRows) -> Grid:
     )
 
 
-def _difference_row(report: MetricsReport, comparison: Comparison) -> tuple[str, ...]:
+def _difference_row(
+    report: MetricsReport, comparison: Comparison, *, in_header: bool
+) -> tuple[str, ...]:
+    """One metric's difference, CI and p-values; ``in_header``: the columns' headers carry ``‡``."""
     interval = comparison.confidence_interval
-    weak = f" {UNDERPOWERED}" if comparison.underpowered else ""
+    weak = f" {UNDERPOWERED}" if comparison.underpowered and not in_header else ""
     label = metric_label(comparison.metric, report.time_unit)
     return (
         f"  {label}" + (f" {FLAG}" if flagged(comparison) else ""),
@@ -308,6 +311,10 @@ def _differences(
 ) -> tuple[list[_Column], list[int]]:
     """The differences table's columns, rows grouped under each treatment; the heading rows."""
     level = f"{report.confidence_level * 100:g} %"
+    # Every comparison underpowered: one mark on each header, not on every cell (a narrow
+    # terminal keeps its width for the numbers).
+    in_header = all(k.underpowered for k in report.comparisons)
+    mark = f" {UNDERPOWERED}" if in_header else ""
     rows: list[tuple[str, ...]] = []
     headings = []
     for statistics, head in zip(report.conditions, heads, strict=True):
@@ -316,8 +323,12 @@ def _differences(
             continue  # the baseline
         headings.append(len(rows))
         rows.append((head, "", "", ""))
-        rows += [_difference_row(report, found[m]) for m in shown.differences if m in found]
-    headers = ("Metric", f"Difference [{level} CI]", *p_headers)
+        rows += [
+            _difference_row(report, found[m], in_header=in_header)
+            for m in shown.differences
+            if m in found
+        ]
+    headers = ("Metric", f"Difference [{level} CI]{mark}", p_headers[0] + mark, p_headers[1])
     columns = [
         _Column(header, tuple(row[index] for row in rows), wrap=index == 0)
         for index, header in enumerate(headers)
