@@ -7,7 +7,6 @@ import json
 import math
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -25,7 +24,6 @@ from swarmtag.policy import Urgency, parse_policy
 from swarmtag.sim import load_profile
 from swarmtag.sim import simulate as simulate_runs
 
-ROOT = Path(__file__).resolve().parents[1]
 CONDITIONS = ["proximity", "urgency:alpha=9"]
 NAMES = ("proximity", "urgency:alpha=9.0")
 SMALL = {"profile": "base", "robots": 3, "carriers": 7, "ticks": 400, "resamples": 200}
@@ -202,13 +200,22 @@ def test_conditions_keep_their_order_and_take_policy_objects():
     assert "runs=2" in repr(chosen)
 
 
-def test_policy_files_add_their_rules():
-    rule = f"{ROOT / 'examples' / 'rules.py'}:urgency_first"
+def test_policy_files_add_their_rules(tmp_path):
+    # a name of its own: a process holds one rule per condition name, and other tests in
+    # the same worker load the examples' urgency_first from elsewhere
+    path = tmp_path / "notebook_rules.py"
+    path.write_text(
+        "def notebook_urgency(urgency, distance, **context):\n"
+        "    return urgency - 0.1 * distance\n",
+        encoding="utf-8",
+    )
     given = {**SMALL, "ticks": 100}
-    with pytest.warns(BackendFallback, match="urgency_first"):  # Python code: reference backend
-        chosen = swarmtag.simulate(conditions="proximity", policy_files=rule, runs=1, **given)
-    assert chosen.conditions == ("proximity", "urgency_first")
-    assert chosen.kpis().loc["urgency_first", "runs"] == 1
+    with pytest.warns(BackendFallback, match="notebook_urgency"):  # Python: reference backend
+        chosen = swarmtag.simulate(
+            conditions="proximity", policy_files=f"{path}:notebook_urgency", runs=1, **given
+        )
+    assert chosen.conditions == ("proximity", "notebook_urgency")
+    assert chosen.kpis().loc["notebook_urgency", "runs"] == 1
 
 
 def test_overrides_are_scenario_keys_parts_or_the_commands_flags():

@@ -148,8 +148,9 @@ def make_tag_files(folder: Path) -> None:
 
     site = bytes(range(32))
     write_key_file(folder / "site.key", site)
-    for role in Role:
-        write_role_key_file(folder / f"{role.name.lower()}.key", role, derive_role_key(site, role))
+    write_role_key_file(
+        folder / "operator.key", Role.OPERATOR, derive_role_key(site, Role.OPERATOR)
+    )
     write_robot_key_file(folder / "robot.key", 7, derive_robot_key(site, 7))  # robot 7's own key
     waiting = TagState(urgency=5, status=TagStatus.AWAITING_PICKUP, destination=2, marker=12)
     TagModel.provision(waiting, site_key=site, store=FileStore(folder / "tag.state"))
