@@ -9,11 +9,11 @@ keys comes ``undelivered_differs``.
 
 from __future__ import annotations
 
-import reprlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
+from swarmtag._checks import show
 from swarmtag._resources import check_memory
 from swarmtag.analysis._kernels import use_compiled
 from swarmtag.analysis._validation import check_options
@@ -35,9 +35,6 @@ __all__ = ["DEFAULT_BASELINE", "JsonValue", "MetricsReport", "choose_baseline", 
 DEFAULT_BASELINE: Final = "proximity"
 """The baseline when none is named (else the first condition in sorted order)."""
 
-_SHORT: Final = reprlib.Repr()
-"""Cuts a condition name shown in a message (a name can be any text)."""
-_SHORT.maxstring = 60
 _LISTED: Final = 12
 """Conditions a refusal lists by name (a sweep may have many)."""
 
@@ -97,7 +94,7 @@ class MetricsReport:
             f", ... ({len(names)} in all)" if len(names) > _LISTED else ""
         )
         asked = (
-            f"no condition {_SHORT.repr(checked)}"
+            f"no condition {show(checked)}"
             if isinstance(checked, str)
             else f"a condition is named by a str, not a {type(checked).__name__}"
         )

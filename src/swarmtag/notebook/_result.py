@@ -7,11 +7,11 @@ first DataFrame asked for, matplotlib on the first plot.
 
 from __future__ import annotations
 
-import reprlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Final
 
+from swarmtag._checks import show
 from swarmtag.analysis import Comparison, MetricsReport, choose_baseline, compare_all
 from swarmtag.errors import StatisticsError
 from swarmtag.io import CarrierLog, EventTable
@@ -26,9 +26,6 @@ __all__ = ["PANDAS_HINT", "NotebookResult", "check_baseline"]
 PANDAS_HINT: Final = "the notebook API needs pandas: pip install 'swarmtag[pandas]'"
 """The refusal where pandas (the ``pandas`` extra) is missing."""
 
-_SHORT: Final = reprlib.Repr()
-"""Cuts a name shown in a message (a name can be any text)."""
-_SHORT.maxstring = 60
 _PLOT_HINT: Final = "plots need matplotlib: pip install 'swarmtag[plot]'"
 
 
@@ -45,7 +42,7 @@ def check_baseline(conditions: Sequence[str], baseline: object) -> str:
         msg = f"baseline: a condition is named by a str, not a {kind}; the conditions are {known}"
         raise StatisticsError(msg)
     if baseline not in conditions:
-        msg = f"baseline {_SHORT.repr(baseline)} is not one of the conditions: {known}"
+        msg = f"baseline {show(baseline)} is not one of the conditions: {known}"
         raise StatisticsError(msg)
     return baseline
 

@@ -11,11 +11,10 @@ from __future__ import annotations
 
 import importlib.util
 import os
-import reprlib
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Final
 
-from swarmtag._checks import MAX_RESAMPLES, MAX_RUN_INDEX, MAX_SEED, check_int
+from swarmtag._checks import MAX_RESAMPLES, MAX_RUN_INDEX, MAX_SEED, check_int, show
 from swarmtag._resources import check_memory
 from swarmtag.analysis import summarize
 from swarmtag.analysis.resampling import bootstrap_memory
@@ -38,9 +37,6 @@ _LONGEST_RULE: Final = 4096
 """Longer ``FILE.py:FUNCTION`` specs are refused before a file is looked for."""
 _LONGEST_MESSAGE: Final = 400
 """A scenario refusal longer than this is shown cut in the middle (a value's repr can be huge)."""
-_SHORT: Final = reprlib.Repr()
-_SHORT.maxstring = 60
-_SHORT.maxother = 60
 
 
 def _require_pandas() -> None:
@@ -67,7 +63,7 @@ def _policy(item: object, where: str) -> Policy:
         msg = f"{where}: a {type(item).__name__} is not a condition name or a Policy"
         raise PolicyError(msg)
     if len(item) > _LONGEST_NAME:
-        msg = f"{where}: {_SHORT.repr(item)} ({len(item)} characters) is not a condition name"
+        msg = f"{where}: {show(item)} ({len(item)} characters) is not a condition name"
         raise PolicyError(msg)
     return parse_policy(item)
 
@@ -75,7 +71,7 @@ def _policy(item: object, where: str) -> Policy:
 def _rule(item: object, where: str) -> Policy:
     """A score rule of one's own, ``FILE.py:FUNCTION`` (checked as ``--policy-file`` is)."""
     if not isinstance(item, str) or len(item) > _LONGEST_RULE:
-        shown = _SHORT.repr(item) if isinstance(item, str) else f"a {type(item).__name__}"
+        shown = show(item) if isinstance(item, str) else f"a {type(item).__name__}"
         msg = f"{where}: {shown} is not FILE.py:FUNCTION"
         raise PolicyError(msg)
     return load_checked_rule(item)
