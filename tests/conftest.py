@@ -82,6 +82,8 @@ def _compile_kernel(config: pytest.Config) -> None:
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The ``first`` tests to the front (a stable sort: the same order on every worker); radio skips."""
+    items.sort(key=lambda item: "first" not in item.keywords)
     if config.getoption("--radio"):
         return
     skip = pytest.mark.skip(reason="needs a Bluetooth adapter: run with --radio")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import shutil
 import signal
@@ -12,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from swarmtag._atomic import WriteFailure
 from swarmtag._outputs import STAGING_PREFIX, OutputPlan
 from swarmtag.errors import OutputError, StudyError
 
@@ -215,3 +217,89 @@ def test_outputs_computed_after_a_swallowed_interrupt_are_not_kept(tmp_path):
     finally:
         restore()
     assert names(tmp_path) == []
+
+
+@pytest.mark.parametrize(
+    ("code", "reason"),
+    [
+        (errno.ENOSPC, "no space left on device"),
+        (errno.EDQUOT, "disk quota exceeded"),
+        (errno.EROFS, "read-only file system"),
+        (errno.EFBIG, "file too large"),
+        (errno.EIO, "input/output error"),
+    ],
+)
+def test_a_staged_write_the_device_refuses_names_the_target(tmp_path, code, reason):
+    (tmp_path / "a.csv").write_text("old")
+    plan = OutputPlan()
+    a = plan.file("--a", tmp_path / "a.csv")
+    b = plan.file("--b", tmp_path / "b.md")
+
+    def write_then_refuse() -> None:
+        with plan.writing() as stage:
+            stage.path(a).write_text("new")
+            with stage.path(b).open("w"):  # a library writing straight to the staged file
+                raise OSError(code, os.strerror(code))  # as a write() raises it: no file named
+
+    with pytest.raises(WriteFailure) as refused:
+        write_then_refuse()
+    assert str(refused.value) == f"{reason} while writing {b}"
+    assert names(tmp_path) == ["a.csv"]
+    assert (tmp_path / "a.csv").read_text() == "old"
+
+
+def test_a_refused_file_in_a_staged_folder_is_named_by_its_target(tmp_path):
+    plan = OutputPlan()
+    figures = plan.folder("--figures", tmp_path / "figs")
+
+    def refuse_a_file_in_the_folder() -> None:
+        with plan.writing() as stage:
+            staged = stage.path(figures) / "one.png"
+            raise OSError(errno.ENOSPC, "No space left on device", str(staged))
+
+    with pytest.raises(WriteFailure) as refused:
+        refuse_a_file_in_the_folder()
+    assert str(refused.value) == f"no space left on device while writing {figures / 'one.png'}"
+    assert names(tmp_path) == []
+
+
+def test_a_writer_s_own_error_for_a_refused_write_becomes_the_one_message(tmp_path, monkeypatch):
+    from swarmtag import _atomic
+    from swarmtag.io import CarrierLog, write_event_log
+
+    def refuse(fd: int) -> None:
+        raise OSError(errno.EDQUOT, "Disk quota exceeded")
+
+    log = CarrierLog(
+        condition=["p"],
+        run=[0],
+        seed=[0],
+        carrier=[4],
+        urgency0=[7],
+        order_time=[0.0],
+        pickup_time=[1.0],
+        delivery_time=[2.0],
+        robot=[1],
+    )
+    plan = OutputPlan()
+    target = plan.file("--events", tmp_path / "e.csv")
+    monkeypatch.setattr(_atomic.os, "fsync", refuse)
+    with pytest.raises(WriteFailure) as refused, plan.writing() as stage:
+        write_event_log(log, stage.path(target))  # the CSV writer wraps it as its own error
+    assert str(refused.value) == f"disk quota exceeded while writing {target}"
+    assert names(tmp_path) == []
+
+
+def test_other_errors_that_name_a_staged_file_name_its_target(tmp_path):
+    plan = OutputPlan()
+    target = plan.file("--out", tmp_path / "a.txt")
+
+    def refuse_naming_the_staged_file() -> None:
+        with plan.writing() as stage:
+            msg = f"{stage.path(target)}: cannot write (Permission denied)"
+            raise StudyError(msg)
+
+    with pytest.raises(StudyError) as refused:
+        refuse_naming_the_staged_file()
+    assert str(refused.value) == f"{target}: cannot write (Permission denied)"
+    assert STAGING_PREFIX not in str(refused.value)

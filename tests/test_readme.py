@@ -26,9 +26,9 @@ What is not run as written, and why:
 
 A command passes when it exits 0 (2 where the README shows it printing ``swarmtag:
 error: …``) and every line the README shows under it is a line of what it printed.
-All of them take about 75 s of CPU time (3 minutes on two cores shared with other
-work), a good part of it starting processes that load the compiled kernel: the test
-is ``serial``, run alone after the rest.
+All of them take about 75 s of CPU time, a good part of it starting processes that
+load the compiled kernel: the test is marked ``first``, so that it starts at once on one
+core while the short tests share the others.
 """
 
 from __future__ import annotations
@@ -194,7 +194,7 @@ def test_smaller_work_keeps_the_command():
     assert smaller(["swarmtag", "metrics", "e.csv"]) == ["swarmtag", "metrics", "e.csv"]
 
 
-@pytest.mark.serial
+@pytest.mark.first
 def test_every_readme_command_works_as_written(tmp_path):
     bin_folder = Path(sys.executable).parent
     if not (bin_folder / "swarmtag").exists():

@@ -12,23 +12,35 @@ by every surface (seeds, run indices) live here too.
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Sequence
 from numbers import Integral, Real
-from typing import Final
+from typing import TYPE_CHECKING, Any, Final, TypeVar
 
 from swarmtag.errors import ConfigError, SwarmtagError
+
+if TYPE_CHECKING:
+    from numpy.typing import NDArray
 
 __all__ = [
     "MAX_RESAMPLES",
     "MAX_RUN_INDEX",
     "MAX_SEED",
     "MAX_WORKERS",
+    "check_array",
     "check_bool",
     "check_choice",
+    "check_instance",
     "check_int",
     "check_number",
+    "check_path",
     "check_probability",
+    "check_sequence",
+    "check_text",
     "show",
 ]
+
+T = TypeVar("T")
 
 MAX_SEED: Final = 2**63 - 1
 """Largest master seed: a seed is stored as a signed 64-bit integer (results store, logs)."""
@@ -83,7 +95,10 @@ def check_number(
     if isinstance(value, bool) or not isinstance(value, Real):
         msg = f"{name}: {show(value)} is not {allowed}"
         raise error(msg)
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond float range
+        number = math.inf
     ok = math.isfinite(number)
     if ok and low is not None:
         ok = number > low if low_open else number >= low
@@ -164,3 +179,114 @@ def check_bool(name: str, value: object, *, error: type[SwarmtagError] = ConfigE
         return value
     msg = f"{name}: {show(value)} is not true or false"
     raise error(msg)
+
+
+def check_instance(
+    name: str, value: object, kind: type[T], *, error: type[SwarmtagError] = ConfigError
+) -> T:
+    """``value`` if it is a ``kind``: a public function's object argument, checked at the entry.
+
+    >>> check_instance("runs", 1.5, dict)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: runs: 1.5 is not a dict
+    """
+    if isinstance(value, kind):
+        return value
+    msg = f"{name}: {show(value)} is not a {kind.__name__}"
+    raise error(msg)
+
+
+def check_text(name: str, value: object, *, error: type[SwarmtagError] = ConfigError) -> str:
+    """``value`` if it is a string (a name, a condition, a spec), else ``error``.
+
+    >>> check_text("condition", 3)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: condition: 3 is not a string
+    """
+    if isinstance(value, str):
+        return value
+    msg = f"{name}: {show(value)} is not a string"
+    raise error(msg)
+
+
+def check_sequence(
+    name: str, value: object, *, error: type[SwarmtagError] = ConfigError
+) -> Sequence[Any]:
+    """``value`` as a tuple if it is a list, tuple or 1-D array (a string is no sequence here).
+
+    >>> check_sequence("levels", 5)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: levels: 5 is not a list or tuple
+    """
+    if isinstance(value, list | tuple | range):
+        return tuple(value)
+    if getattr(value, "ndim", None) == 1 and hasattr(value, "tolist"):
+        return tuple(value.tolist())  # a 1-D numpy array
+    msg = f"{name}: {show(value)} is not a list or tuple"
+    raise error(msg)
+
+
+def check_array(
+    name: str,
+    value: object,
+    *,
+    integer: bool = False,
+    nan: bool = False,
+    low: float | None = None,
+    error: type[SwarmtagError] = ConfigError,
+) -> NDArray[Any]:
+    """``value`` as a 1-D float64 (or int64) array of finite numbers, each ``>= low``.
+
+    ``nan=True`` lets NaN through (an undefined value), never an infinity.
+    Checked once at a public entry; the kernels behind it trust the array.
+
+    >>> check_array("x", [1.0, float("inf")])
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: x: [1.0, inf] holds a value that is not a finite number
+    """
+    import numpy as np  # noqa: PLC0415 - the scenario checks above never need numpy
+
+    kind = "integers" if integer else "numbers"
+    try:
+        array = np.asarray(value)
+        numbers = array.astype(np.float64) if array.dtype.kind in "iuf" else None
+    except (TypeError, ValueError, OverflowError):
+        numbers = None
+    if numbers is None or numbers.ndim != 1:
+        msg = f"{name}: {show(value)} is not a 1-D sequence of {kind}"
+        raise error(msg)
+    finite = np.isfinite(numbers)
+    if not (finite | np.isnan(numbers) if nan else finite).all():
+        msg = f"{name}: {show(value)} holds a value that is not a finite number"
+        raise error(msg)
+    if integer and not (np.isnan(numbers) | (numbers == np.round(numbers))).all():
+        msg = f"{name}: {show(value)} holds a value that is not an integer"
+        raise error(msg)
+    if low is not None and (numbers < low).any():
+        msg = f"{name}: {show(value)} holds a value below {low:g}"
+        raise error(msg)
+    if not integer:
+        return numbers
+    if (np.abs(numbers) > 2**62).any():
+        msg = f"{name}: {show(value)} holds an integer too large"
+        raise error(msg)
+    return array.astype(np.int64)
+
+
+def check_path(name: str, value: object, *, error: type[SwarmtagError] = ConfigError) -> str:
+    """``value`` as a path string if it is a ``str`` or ``os.PathLike`` naming something.
+
+    >>> check_path("baseline", 3)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.ConfigError: baseline: 3 is not a path
+    """
+    text = os.fspath(value) if isinstance(value, str | os.PathLike) else None
+    if not isinstance(text, str) or not text or "\0" in text:
+        msg = f"{name}: {show(value)} is not a path"
+        raise error(msg)
+    return text

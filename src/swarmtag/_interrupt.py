@@ -22,6 +22,7 @@ from __future__ import annotations
 import _thread
 import signal
 import sys
+import threading
 import time
 
 # Only signal at run time: ``swarmtag.cli.main`` imports this module first thing, and until
@@ -30,8 +31,19 @@ TYPE_CHECKING = False
 if TYPE_CHECKING:
     from collections.abc import Callable
     from types import FrameType
+    from typing import TypeVar
 
-__all__ = ["RESEND_S", "acknowledge", "checkpoint", "deferred", "install", "interrupted"]
+    T = TypeVar("T")
+
+__all__ = [
+    "RESEND_S",
+    "acknowledge",
+    "checkpoint",
+    "deferred",
+    "in_thread",
+    "install",
+    "interrupted",
+]
 
 RESEND_S = 0.2
 """Seconds between the watchdog's re-sends of a Ctrl-C that nobody has taken yet."""
@@ -184,3 +196,34 @@ class deferred:  # noqa: N801 - used as ``with deferred():``, like contextlib's 
             if self._previous is _handler:
                 _flag()
             raise KeyboardInterrupt
+
+
+def in_thread(work: Callable[[], T]) -> T:
+    """``work()``, run in a helper thread while this one waits, so that Ctrl-C is taken at once.
+
+    For one long call into compiled code that lets go of the interpreter (OpenCV's
+    decoding and marker detection do): run in the main thread, no signal handler
+    could run until it returned. An interrupt leaves the helper to finish on its
+    own (a daemon thread: the process does not wait for it); its result is dropped.
+    Outside the main thread ``work`` simply runs.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return work()
+    outcome: list[tuple[bool, object]] = []
+    done = threading.Event()
+
+    def run() -> None:
+        try:
+            outcome.append((True, work()))
+        except BaseException as error:  # noqa: BLE001 - handed to the waiting thread
+            outcome.append((False, error))
+        finally:
+            done.set()
+
+    threading.Thread(target=run, name="swarmtag-in-thread", daemon=True).start()
+    while not done.wait(RESEND_S):
+        checkpoint()
+    ok, value = outcome[0]
+    if not ok:
+        raise value  # type: ignore[misc]
+    return value  # type: ignore[return-value]

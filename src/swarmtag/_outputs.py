@@ -11,7 +11,10 @@ Work writes each output under a hidden staging folder beside its target,
 with the target's own name (so formats chosen by suffix still work). Only
 when every output was written are they moved into place, with Ctrl-C held
 back for those few renames; any failure or Ctrl-C before that removes the
-staging folders and leaves the targets exactly as they were. Their removal
+staging folders and leaves the targets exactly as they were. A write the
+device refuses (full, over quota, read-only, an I/O error) is one
+``WriteFailure`` naming the target, never the staged file:
+``no space left on device while writing out/report.html``. Their removal
 holds Ctrl-C back too, and a staging folder that a Ctrl-C between two steps
 kept from its removal (one arriving as the ``with`` block ends, before the
 context manager runs) is removed when the process exits.
@@ -38,6 +41,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import NoReturn
 
+from swarmtag._atomic import WriteFailure, failures_named, write_failure
 from swarmtag._interrupt import checkpoint, deferred
 from swarmtag.errors import OutputError, SwarmtagError
 
@@ -77,16 +81,53 @@ def _key(path: Path) -> str:
 class Stage:
     """Where a command writes its outputs while it works: ``stage.path(target)``."""
 
-    def __init__(self, staged: dict[str, Path]) -> None:
+    def __init__(self, staged: dict[str, Path], targets: dict[str, Path]) -> None:
         self._staged = staged
+        self._targets = targets
+        self.last: Path | None = None
+        """The target last asked for: the one being written when a write names no file."""
 
     def path(self, target: Path) -> Path:
         """The staged path to write instead of ``target`` (a planned file or folder output)."""
         try:
-            return self._staged[_key(target)]
+            staged = self._staged[_key(target)]
         except KeyError:
             msg = f"{target}: not a planned output"  # a bug in the command, not bad input
             raise OutputError(msg) from None
+        self.last = self._targets[_key(target)]
+        return staged
+
+    def target(self, written: object) -> Path | None:
+        """The target a staged path stands for (a file in a staged folder: that file's target).
+
+        A path in a staging folder that is no planned output (a library's
+        scratch file) stands for the target last asked for; a path outside
+        the staging folders, for itself; no path at all, for the last target.
+        """
+        if not isinstance(written, (str, bytes, os.PathLike)):  # a descriptor, or no file at all
+            return self.last
+        given = Path(os.fsdecode(written))
+        where = given.resolve()
+        for key, staged in self._staged.items():
+            home = staged.resolve()
+            if where == home or home in where.parents:
+                return self._targets[key] / where.relative_to(home)
+        if any(part.startswith(STAGING_PREFIX) for part in where.parts):
+            return self.last
+        return given
+
+    def rename(self, error: SwarmtagError) -> SwarmtagError:
+        """``error`` with every staged path in its message spelled as its target."""
+        if isinstance(error, WriteFailure):
+            target = self.target(error.path)
+            return error if target is None else WriteFailure(error.reason, target)
+        message = str(error)
+        # Longest first, so that a staged folder's file is not renamed by its folder's prefix.
+        for key, staged in sorted(self._staged.items(), key=lambda item: -len(str(item[1]))):
+            message = message.replace(str(staged), str(self._targets[key]))
+        if message != str(error):
+            error.args = (message,)
+        return error
 
 
 class OutputPlan:
@@ -186,7 +227,9 @@ class OutputPlan:
         """Stage every output; move all into place if the body succeeds, else remove them all."""
         roots: dict[str, Path] = {}
         staged: dict[str, Path] = {}
+        targets: dict[str, Path] = {}
         moves: list[tuple[Path, Path, bool]] = []
+        stage = Stage(staged, targets)
         try:
             planned = [(k, v, False) for k, v in self._files.items()]
             planned += [(k, v, True) for k, v in self._folders.items()]
@@ -198,8 +241,23 @@ class OutputPlan:
                 if is_folder:
                     temp.mkdir()
                 staged[key] = temp
+                targets[key] = path
                 moves.append((temp, path, is_folder))
-            yield Stage(staged)
+            try:
+                yield stage
+            except OSError as problem:  # written by a library straight to the staged file
+                written = problem.path if isinstance(problem, WriteFailure) else problem.filename
+                named = stage.target(written)
+                everything = ", ".join(str(target) for target in targets.values())
+                failure = write_failure(problem, named or everything)
+                if failure is None or not (named or everything):
+                    raise
+                raise failure from None
+            except SwarmtagError as error:
+                renamed = stage.rename(_device_failure(error) or error)
+                if renamed is error:
+                    raise
+                raise renamed from None
             missing = [str(target) for temp, target, _ in moves if not temp.exists()]
             if missing:  # a command that planned an output must write it
                 msg = f"not written: {', '.join(missing)}"
@@ -210,17 +268,28 @@ class OutputPlan:
             _remove([*roots.values()])
 
 
+def _device_failure(error: BaseException) -> WriteFailure | None:
+    """The ``WriteFailure`` behind ``error`` (a writer that wrapped it in its own error), if any."""
+    seen: BaseException | None = error
+    for _ in range(8):  # a chain of a few wrappers at most
+        if seen is None or isinstance(seen, WriteFailure):
+            return seen
+        seen = seen.__cause__ or seen.__context__
+    return None
+
+
 def _commit(moves: Sequence[tuple[Path, Path, bool]]) -> None:
     """Move the staged outputs into place with Ctrl-C held back until all are there."""
     with deferred():
         for temp, target, is_folder in moves:
-            if not is_folder:
-                temp.replace(target)
-                continue
-            target.mkdir(exist_ok=True)
-            for item in sorted(temp.rglob("*")):  # merged file by file into what is there
-                destination = target / item.relative_to(temp)
-                if item.is_dir():
-                    destination.mkdir(exist_ok=True)
-                else:
-                    item.replace(destination)
+            with failures_named(target):
+                if not is_folder:
+                    temp.replace(target)
+                    continue
+                target.mkdir(exist_ok=True)
+                for item in sorted(temp.rglob("*")):  # merged file by file into what is there
+                    destination = target / item.relative_to(temp)
+                    if item.is_dir():
+                        destination.mkdir(exist_ok=True)
+                    else:
+                        item.replace(destination)

@@ -7,6 +7,7 @@ import pytest
 
 from swarmtag.calibration import search
 from swarmtag.calibration.search import design_size
+from swarmtag.errors import CalibrationError
 
 
 class Counting:
@@ -76,5 +77,5 @@ def test_design_sizes():
 
 
 def test_refuses_an_empty_search():
-    with pytest.raises(ValueError, match="budget >= 1"):
+    with pytest.raises(CalibrationError, match=r"budget: 0 is not an integer in 1-100000"):
         search(Counting(quadratic((0.5,))), 1, budget=0, seed=0)

@@ -8,6 +8,8 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import struct
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,7 +25,8 @@ class Made:
 
     ``kind``: ``copy`` (a template), ``secret`` (a template copied with mode
     0600, as key files must be), ``edit`` (a template changed by ``op``),
-    ``bytes`` (``data``), ``dir``, ``fifo``, ``tree`` (a template folder) or
+    ``nest`` (a template, or nothing, with deep TOML added: ``op`` is the
+    form and depth of ``nested_toml``), ``bytes`` (``data``), ``dir``, ``fifo``, ``tree`` (a template folder) or
     ``parent`` (only the folder above ``name``).
     """
 
@@ -70,6 +73,17 @@ deliveries_per_run = { value = 1, ci = [0.5, 1.5] }
 pa = { value = 0.5, ci = [0.2, 0.8], weight = 0 }
 """
 TINY_SCENARIO = "robots = 2\ncarriers = 3\nticks = 20\n\n[camera]\nmemory = 2.0\n"
+TINY_WAREHOUSE = """\
+robots = 2
+ticks = 20
+
+[warehouse]
+map = "small-warehouse"
+warmup = 0.5
+order_interval = 1.0
+initial_orders = 2
+"""
+"""A scenario file with a warehouse: a short warm-up, so that a 20-tick run is valid."""
 
 
 NUMBER = re.compile(rb"-?\d+(?:\.\d+)?(?:e[+-]?\d+)?")
@@ -88,6 +102,9 @@ def edit(data: bytes, op: tuple[Any, ...]) -> bytes:  # noqa: PLR0911 - one retu
         return data[:at] + bytes([args[1]]) + data[at + 1 :]
     if name == "random":
         return args[0]
+    if name == "replace":  # the first occurrence of args[0] (or the end, if none)
+        at = data.find(args[0])
+        return data + args[1] if at < 0 else data[:at] + args[1] + data[at + len(args[0]) :]
     if name == "number":
         matches = list(NUMBER.finditer(data)) or [re.search(rb"$", data)]
         match = matches[args[0] % len(matches)]
@@ -127,6 +144,9 @@ def make(token: Made, work: Path, templates: dict[str, Path]) -> None:
         target.chmod(0o600)
     elif token.kind == "edit":
         target.write_bytes(edit(templates[token.template].read_bytes(), token.op))
+    elif token.kind == "nest":
+        base = templates[token.template].read_text("utf-8") if token.template else ""
+        target.write_bytes(nested_toml(*token.op, base=base))
     else:
         target.write_bytes(token.data)
 
@@ -171,9 +191,84 @@ def make_camera_files(folder: Path) -> None:
     under = render(rig.camera("upward"), rig.carrier, [Placement(7, 0.02, 0.0)], rng=rng)
     cv2.imwrite(str(folder / "under.png"), under)
     shutil.copyfile(rig_path("dots-like"), folder / "rig.toml")
+    cv2.imwrite(str(folder / "one.png"), front[:1, :1])  # a 1 x 1 image
+    data = (folder / "camera.png").read_bytes()
+    (folder / "cut.png").write_bytes(data[: len(data) * 3 // 5])  # a truncated PNG
+
+
+def png_claiming(width: int, height: int) -> bytes:
+    """A small PNG whose header claims ``width`` x ``height`` pixels (a decompression bomb).
+
+    >>> len(png_claiming(100_000, 100_000)) < 100
+    True
+    """
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        crc = zlib.crc32(kind + body)
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", crc)
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)  # 8-bit grey
+    pixels = zlib.compress(b"\0" * 64)
+    return (
+        b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", pixels) + chunk(b"IEND", b"")
+    )
+
+
+def make_cache_file(folder: Path) -> None:
+    """A valid calibration cache (two lines) for the fuzzer to damage."""
+    from swarmtag.calibration import EvaluationCache
+    from swarmtag.calibration.cache import CacheEntry
+
+    cache = EvaluationCache(folder / "cache.jsonl")
+    for number, dock in enumerate((0.5, 4.0)):
+        achieved = {"t": {"deliveries_per_run": 1.0 + number, "pa": None}}
+        cache.put(f"k{number}", CacheEntry({"timing.dock": dock}, achieved), objective=1.0)
 
 
 # --- damaged and missing inputs -----------------------------------------------------------
+
+DEPTHS = (20, 40, 400, 3000)
+"""How deep the nested TOML goes: below, at and far above every surface's limit."""
+
+
+def nested_value(form: str, depth: int) -> str:
+    """A TOML value nested ``depth`` deep: arrays, inline tables, or both in turn."""
+    if form == "array":
+        return "[" * depth + "1" + "]" * depth
+    if form == "inline":
+        return "{a = " * depth + "1" + "}" * depth
+    return "[{a = " * (depth // 2) + "1" + "}]" * (depth // 2)
+
+
+def nested_toml(form: str, depth: int, base: str = "") -> bytes:
+    """A TOML document with something ``depth`` deep, after ``base`` (a file it extends).
+
+    ``tables``: ``[a.a.a...]`` headers; ``arrays``: ``[[a.a...]]`` arrays of
+    tables; ``array``, ``inline``, ``mixed``: one key's value (``nested_value``).
+    """
+    if form == "tables":
+        extra = "[" + ".".join(["a"] * depth) + "]\nx = 1\n"
+    elif form == "arrays":
+        extra = "[[" + ".".join(["a"] * depth) + "]]\nx = 1\n"
+    else:
+        extra = f"deep = {nested_value(form, depth)}\n"
+    return (
+        (extra + base).encode()
+        if form in ("array", "inline", "mixed")
+        else (base + "\n" + extra).encode()
+    )
+
+
+NESTED_FORMS = ("tables", "arrays", "array", "inline", "mixed")
+
+
+def nested(template: str, suffix: str = ".toml") -> st.SearchStrategy[Token]:
+    """``template`` (a template name, or "" for nothing) with deep TOML added to it."""
+
+    def build(form: str, depth: int) -> Token:
+        return Made(f"deep-{form}-{depth}{suffix}", "nest", template=template, op=(form, depth))
+
+    return st.builds(build, st.sampled_from(NESTED_FORMS), st.sampled_from(DEPTHS))
 
 
 HUGE = (

@@ -24,7 +24,10 @@ from tests.cli.fuzz_files import (
     Token,
     copy,
     edited,
+    nested,
+    nested_value,
     not_a_file,
+    png_claiming,
 )
 
 # --- values: a valid branch and a bad one for every option ------------------------------------
@@ -227,7 +230,7 @@ BAG_MAPPING = Values(
     st.one_of(
         edited("mapping.toml", ".toml"),
         toml_edit("mapping.toml", MAPPING_KEYS),
-        copy("profile.toml"),
+        nested("mapping.toml"),
         not_a_file(".toml"),
     ),
 )
@@ -264,8 +267,8 @@ STUDY_SOURCE = Values(
             st.sampled_from(TOML_VALUES),
         ),
         st.sampled_from([*SHIPPED_STUDIES, "Scalability", "no-such-study", "tiny"]),
+        nested("study.toml"),
         not_a_file(".toml"),
-        words,
     ),
 )
 """A study file or a shipped study's name."""
@@ -288,7 +291,7 @@ BASELINE = Values(
             st.sampled_from(TOML_VALUES),
         ),
         st.sampled_from(["lab", "paper-sim", "Lab", "nope"]),
-        EVENT_LOG.good,
+        nested("targets.toml"),
         EVENT_LOG.bad,
         not_a_file(".toml"),
     ),
@@ -303,15 +306,23 @@ PROFILE = Values(
         st.sampled_from(["BASE", "nope", "nope.toml"]),
         edited("profile.toml", ".toml"),
         toml_edit("profile.toml", ["tick", "perception", "detection_radius", "time_unit"]),
+        nested("profile.toml"),
         not_a_file(".toml"),
-        junk,
     ),
 )
+WAREHOUSE_KEYS = (
+    "warehouse.map", "warehouse.cell", "warehouse.order_interval", "warehouse.initial_orders",
+    "warehouse.urgency_window", "warehouse.warmup", "warehouse", "warehouse.nope",
+    "map", "cell", "order_interval", "initial_orders", "urgency_window", "warmup", "[warehouse]",
+)  # fmt: skip
+"""Keys of a scenario's ``[warehouse]`` table, dotted and bare (for a line inside the table)."""
 CONFIG = Values(
-    copy("scenario.toml"),
+    st.one_of(copy("scenario.toml"), copy("scenario.toml"), copy("warehouse.toml")),
     st.one_of(
         edited("scenario.toml", ".toml"),
         toml_edit("scenario.toml", ["robots", "carriers", "ticks", "tick", "arena", "camera"]),
+        toml_edit("warehouse.toml", WAREHOUSE_KEYS),
+        nested("scenario.toml"),
         not_a_file(".toml"),
     ),
 )
@@ -341,10 +352,33 @@ def set_items() -> Values:
     )
     cheap = st.sampled_from(sorted(CHEAP)).flatmap(lambda k: CHEAP[k].map(lambda v: f"{k}={v}"))
     garbage = st.builds(
-        "{}={}".format, st.sampled_from(keys), st.one_of(st.sampled_from(TOML_VALUES), junk)
+        "{}={}".format,
+        st.sampled_from([*keys, *WAREHOUSE_KEYS[:8]]),
+        st.one_of(st.sampled_from(TOML_VALUES), junk),
+    )
+    deep = st.builds(
+        "{}={}".format,
+        st.sampled_from(["robots", "camera.memory", "warehouse.map", "nope"]),
+        st.builds(
+            nested_value,
+            st.sampled_from(["array", "inline", "mixed"]),
+            st.sampled_from([40, 400, 3000]),
+        ),
     )
     malformed = st.sampled_from(["", "=", "=5", "ticks", "ticks==5", "[x]=1", "a=b=c"])
-    return Values(st.one_of(own, cheap), st.one_of(garbage, malformed))
+    malformed |= st.sampled_from([".".join(["warehouse"] * 400) + "=1", "warehouse..map=x"])
+    return Values(
+        st.one_of(own, cheap, own, warehouse_items()), st.one_of(garbage, deep, malformed)
+    )
+
+
+def warehouse_items() -> st.SearchStrategy[str]:
+    """``--set warehouse.KEY=VALUE`` that a warehouse run takes (a short warm-up, small maps)."""
+    return st.sampled_from([
+        "warehouse.map=small-warehouse", 'warehouse.map="small-warehouse"', "warehouse.warmup=0",
+        "warehouse.warmup=0.5", "warehouse.order_interval=1", "warehouse.initial_orders=2",
+        "warehouse.cell=0.75", "warehouse.urgency_window=600",
+    ])  # fmt: skip
 
 
 CONDITIONS = texts(
@@ -477,11 +511,68 @@ EMULATE_OPTIONS: dict[str, Values] = {
 }
 """``tag emulate``: the software tag on replayed writes (hidden --replay), never a radio."""
 
+FIELDS_OF_VIEW = ("1", "1.5", "2", "3", "5", "0.1", "179.9")
+"""Horizontal fields of view (degrees) of valid but narrow (or all but flat) cameras."""
+
+
+def narrow_cameras() -> st.SearchStrategy[Token]:
+    """The shipped rig with a 1-5 degree field of view (and the extremes around it)."""
+    return st.sampled_from(FIELDS_OF_VIEW).map(
+        lambda fov: Made(
+            f"fov-{fov}.toml",
+            "edit",
+            template="rig.toml",
+            op=("replace", b"horizontal_fov = 102.0", f"horizontal_fov = {fov}".encode()),
+        )
+    )
+
+
+CACHE_NUMBERS = (
+    b"NaN", b"Infinity", b"-Infinity", b"null", b"9" * 400, b"-1e308", b"1e309", b'"1.0"',
+    b"[" * 400 + b"1" + b"]" * 400, b'{"a": ' * 300 + b"1" + b"}" * 300, b"true", b"1e-400",
+)  # fmt: skip
+"""Replacements for one value of a calibration cache line."""
+CACHE_RENAMES = (
+    (b'"achieved"', b'"achieveD"'), (b'"values"', b'"value"'), (b'"check"', b'"chek"'),
+    (b'"timing.dock"', b'"timing.undock"'), (b'"pa"', b'"PA"'), (b'"key"', b'"key", "key"'),
+    (b"{", b"["), (b"\n", b"\n\n{}\n"),
+)  # fmt: skip
+"""Key renames and shape changes of a cache line."""
+
+
+CACHE_SPOTS = (b"1.0", b"0.5", b"2.0", b"4.0", b"null", b'"k0"')
+"""Values of the template cache's lines (KPIs, free values, a key) that draws replace."""
+
+
+def damaged_caches() -> st.SearchStrategy[Token]:
+    """The template cache with a value replaced, a key renamed, or bytes damaged."""
+    number = st.builds(
+        lambda n, spot, value: Made(
+            f"cache{n}.jsonl", "edit", template="cache.jsonl", op=("replace", spot, value)
+        ),
+        st.integers(0, 3),
+        st.sampled_from(CACHE_SPOTS),
+        st.sampled_from(CACHE_NUMBERS),
+    )
+    renamed = st.builds(
+        lambda n, pair: Made(
+            f"cache{n}.jsonl", "edit", template="cache.jsonl", op=("replace", *pair)
+        ),
+        st.integers(0, 3),
+        st.sampled_from(CACHE_RENAMES),
+    )
+    return st.one_of(number, renamed, edited("cache.jsonl", ".jsonl", text=False))
+
+
 IMAGE = Values(
     st.one_of(copy("camera.png"), copy("under.png")),
     st.one_of(
         edited("camera.png", ".png", text=False),
-        copy("small.png"),
+        copy("one.png"),  # 1 x 1
+        copy("cut.png"),  # truncated
+        st.sampled_from([(100_000, 100_000), (1, 100_000), (65_535, 65_535)]).map(
+            lambda size: Made(f"claims-{size[0]}x{size[1]}.png", "bytes", data=png_claiming(*size))
+        ),  # a few bytes whose header claims a huge image
         copy("trial.csv"),
         copy("rig.toml"),
         not_a_file(".png"),
@@ -498,7 +589,8 @@ CAMERA_FILE = Values(
     st.one_of(
         edited("rig.toml", ".toml"),
         toml_edit("rig.toml", RIG_KEYS),
-        copy("profile.toml"),
+        nested("rig.toml"),
+        narrow_cameras(),
         not_a_file(".toml"),
         st.sampled_from(["Dots-like", "nope", "nope.toml"]),
         junk,
@@ -577,11 +669,21 @@ BY_COMMAND: dict[tuple[str, ...], dict[str, Values]] = {
     ("log", "import"): {"bag": BAG, "mapping": BAG_MAPPING},
     ("aruco", "render"): ARUCO_RENDER,
     ("aruco", "detect"): {"image": IMAGE, "camera": CAMERA_FILE, "view": ARUCO_VIEW},
+    ("console",): {
+        "token_file": file_output(".token"),
+        "audit_log": file_output(".jsonl"),
+        "counter_file": file_output(".counters"),
+        "host": texts(["127.0.0.1", "::1", "localhost"], ["256.0.0.1", "no such host"]),
+        "port": integers(0, 65535, (0, 0)),  # any free port: parallel workers never collide
+    },
     ("calibrate",): {
         "baseline": BASELINE,
         "out": with_inputs(file_output(".toml")),
         "report": file_output(".md"),
-        "cache_path": with_inputs(file_output(".jsonl", ".cache")),
+        "cache_path": Values(
+            st.one_of(file_output(".jsonl", ".cache").good, copy("cache.jsonl")),
+            st.one_of(with_inputs(file_output(".jsonl", ".cache")).bad, damaged_caches()),
+        ),
         "free": FREE,
         "name": texts(["mine", "tiny", "a b"]),
         "condition": texts(["proximity"], ["urgency:alpha=0.7", "nope"]),
@@ -638,5 +740,6 @@ OUTPUTS: dict[tuple[str, ...], dict[str, str]] = {
     ("tag", "emulate"): {"state_file": "file", "eink": "file"},
     ("log", "import"): {"events": "file", "event_table": "file"},
     ("aruco", "render"): {"out": "file"},
+    ("console",): {"token_file": "file", "audit_log": "optional", "counter_file": "optional"},
 }
 """The outputs of each command, by parameter name: what a success must have written."""

@@ -159,7 +159,7 @@ def test_a_camera_file_is_read_and_a_photo_of_another_size_refused(capsys, tmp_p
     code, _, err = run(capsys, "aruco", "detect", str(image))
     assert code == 2
     assert err == (
-        "swarmtag: error: image is 640x480 but camera 'front' is 1920x1080; "
+        f"swarmtag: error: {image}: the image is 640x480 but camera 'front' is 1920x1080; "
         "give the camera file of the camera that took it\n"
     )
 
@@ -168,7 +168,7 @@ def test_a_camera_file_is_read_and_a_photo_of_another_size_refused(capsys, tmp_p
     ("argv", "words"),
     [
         (["detect", "{tmp}/none.png"], "no such image"),
-        (["detect", "{tmp}/text.png"], "not an image OpenCV can read"),
+        (["detect", "{tmp}/text.png"], "not an image whose size can be read before decoding"),
         (["detect", "{tmp}"], "is a folder"),
         (["detect", "{tmp}/text.png", "--camera", "nope"], "no such file or shipped rig"),
         (["detect", "{tmp}/text.png", "--view", "side"], "has no camera 'side'"),
@@ -265,3 +265,120 @@ def test_missing_opencv_is_one_line_naming_the_extra(capsys, tmp_path, monkeypat
         assert (code, out) == (2, "")
         assert err == f"swarmtag: error: {NEEDS_EXTRA}\n"
     assert not (tmp_path / "b.png").exists()
+
+
+# --- images and cameras checked before work (docs/perception.md, "Images and cameras") --------
+
+
+def _png(path, width: int, height: int, rows: bytes = b"") -> None:
+    """A grey PNG whose header says ``width`` x ``height``; ``rows`` is its compressed content."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        crc = zlib.crc32(kind + data) & 0xFFFFFFFF
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", crc)
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 0, 0, 0, 0)
+    path.write_bytes(
+        b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", rows) + chunk(b"IEND", b"")
+    )
+
+
+def _zeros(width: int, height: int) -> bytes:
+    """The compressed rows of an all-black grey image (a decompression bomb when large)."""
+    import zlib
+
+    packer = zlib.compressobj(9)
+    row = b"\x00" * (width + 1)
+    return b"".join(packer.compress(row) for _ in range(height)) + packer.flush()
+
+
+def test_an_image_claiming_huge_size_is_refused_from_its_header(capsys, tmp_path):
+    image = tmp_path / "huge.png"
+    _png(image, 100_000, 100_000, b"x\x9c\x03\x00\x00\x00\x00\x01")
+    assert image.stat().st_size < 100
+    code, out, err = run(capsys, "aruco", "detect", str(image))
+    assert (code, out) == (2, "")
+    assert err == (
+        f"swarmtag: error: {image}: the image is 100000x100000 pixels (10,000,000,000); "
+        "at most 400,000,000 are read (the largest camera a camera file may give)\n"
+    )
+
+
+def test_a_decompression_bomb_is_refused_before_it_is_decoded(capsys, tmp_path, monkeypatch):
+    image = tmp_path / "bomb.png"
+    _png(image, 12_000, 12_000, _zeros(12_000, 12_000))
+    assert image.stat().st_size < 200_000  # 144 megapixels in 140 KB
+    monkeypatch.setenv("SWARMTAG_MEMORY_LIMIT", "512MiB")
+    import cv2
+
+    def never(*_args):
+        raise AssertionError("decoded")
+
+    monkeypatch.setattr(cv2, "imdecode", never)
+    code, out, err = run(capsys, "aruco", "detect", str(image))
+    assert (code, out) == (2, "")
+    assert err.startswith(f"swarmtag: error: {image}: decoding and searching a 12000x12000 image")
+    assert "512.0 MiB is available" in err
+    assert err.count("\n") == 1
+
+
+def test_a_damaged_image_is_one_line_and_libpng_stays_quiet(capfd, tmp_path):
+    image = tmp_path / "photo.png"
+    with pytest.raises(SystemExit):
+        main(
+            [
+                *["aruco", "render", "--marker", "3", "--distance", "1", "--bearing", "0", "--out"],
+                str(image),
+            ]
+        )
+    capfd.readouterr()
+    data = bytearray(image.read_bytes())
+    data[100] ^= 0xFF  # inside the compressed pixels: libpng complains while decoding
+    image.write_bytes(bytes(data))
+    with pytest.raises(SystemExit) as exited:
+        main(["aruco", "detect", str(image)])
+    out, err = capfd.readouterr()
+    assert (exited.value.code, out) == (2, "")
+    assert err == (
+        f"swarmtag: error: {image}: a damaged image: OpenCV could not decode it "
+        "(PNG, JPEG, BMP, TIFF, WebP, PNM)\n"
+    )
+
+
+def test_a_narrow_camera_detects_instead_of_failing_in_opencv(capsys, tmp_path):
+    camera = tmp_path / "narrow.toml"
+    text = (
+        rig_path("dots-like").read_text().replace("horizontal_fov = 102.0", "horizontal_fov = 1.0")
+    )
+    camera.write_text(text)
+    image = tmp_path / "far.png"
+    code, _, err = run(
+        capsys, "aruco", "render", "--marker", "3", "--distance", "20", "--bearing", "0",
+        "--camera", str(camera), "--out", str(image),
+    )  # fmt: skip
+    assert (code, err) == (0, "")
+    code, out, err = run(capsys, "aruco", "detect", str(image), "--camera", str(camera), "--json")
+    assert (code, err) == (0, "")
+    (carrier,) = json.loads(out)["carriers"]
+    assert carrier["id"] == 3
+    assert carrier["distance"] == pytest.approx(20.0, rel=0.01)
+
+
+def test_a_camera_too_large_for_memory_is_refused_before_the_image_is_read(
+    capsys, tmp_path, monkeypatch
+):
+    camera = tmp_path / "big.toml"
+    text = rig_path("dots-like").read_text().replace("width = 1920", "width = 20000")
+    camera.write_text(text.replace("height = 1080", "height = 20000"))
+    monkeypatch.setenv("SWARMTAG_MEMORY_LIMIT", "1GiB")
+    code, out, err = run(
+        capsys, "aruco", "detect", str(tmp_path / "none.png"), "--camera", str(camera)
+    )
+    assert (code, out) == (2, "")
+    assert err.startswith(
+        f"swarmtag: error: {camera}: camera 'front': width x height 20000x20000 "
+        "(decoding and searching one of its colour images) needs about 7.1 GiB of memory; "
+        "1.0 GiB is available"
+    )

@@ -8,7 +8,15 @@ wrong type or a random word; paths are new names with right and wrong
 suffixes, missing folders, folders, regular files, FIFOs, ``/proc`` (which
 even root cannot write), or one name given to two options; inputs are the
 shipped example trial, small valid logs and study/target/profile files, and
-corrupted copies of them. How often a value is a bad one is drawn per
+corrupted copies of them. The newer surfaces are drawn too: ``warehouse.*``
+scenario keys (``--set warehouse.KEY=VALUE`` and ``[warehouse]`` tables in
+``--config`` files), TOML nested 20 to 3,000 deep (tables, arrays of tables,
+arrays, inline tables) on every TOML surface (``--profile``, ``--config``,
+``--set`` values, study files, calibration baselines, bag mappings, camera
+files), damaged calibration caches (NaN, Infinity, null, 400-digit numbers,
+-1e308, deep nesting, renamed keys), PNGs whose header claims 100000 x 100000
+pixels, truncated PNGs and 1 x 1 images for ``aruco detect``, and camera files
+with a 1-5 degree field of view. How often a value is a bad one is drawn per
 invocation, so that some invocations are wholly valid and reach deep.
 
 Every invocation must exit 0 or 2; exit 2 prints exactly one
@@ -28,9 +36,10 @@ The few inputs that would start real work (shipped studies, shipped
 calibration baselines, event-log baselines) run under a 1 KiB limit, which
 refuses them before their first simulation.
 
-The seed is fixed (0) and printed with every failure; pin another one, and
-ask for more invocations in all (shared out over the commands as in the
-normal mode)::
+The seed is 0 unless pinned, and printed with every failure (also one that
+is not an invocation's, such as a template that cannot be made); pin another
+one, and ask for more invocations in all (shared out over the commands as in
+the normal mode)::
 
     SWARMTAG_FUZZ_SEED=7 SWARMTAG_FUZZ_EXAMPLES=20000 \\
         pytest -q -p no:cacheprovider tests/cli/test_fuzz.py
@@ -63,15 +72,20 @@ from swarmtag._resources import MEMORY_LIMIT_VARIABLE
 from swarmtag.calibration import default_cache_path
 from swarmtag.cli import main
 from swarmtag.cli._main import app
+from swarmtag.cli.console import DEFAULT_COUNTER_FILE as COUNTERS
+from swarmtag.cli.console import DEFAULT_TOKEN_FILE
+from swarmtag.console.audit import DEFAULT_AUDIT_LOG
 from swarmtag.data import example_trial_path
 from swarmtag.sim.config.profiles import profile_path
 from tests.cli.fuzz_files import (
     TINY_SCENARIO,
     TINY_STUDY,
     TINY_TARGETS,
+    TINY_WAREHOUSE,
     Made,
     Token,
     make,
+    make_cache_file,
     make_camera_files,
     make_tag_files,
 )
@@ -115,8 +129,9 @@ NORMAL_EXAMPLES = {
     ("log", "mapping"): 5,
     ("aruco", "render"): 50,
     ("aruco", "detect"): 50,
+    ("console",): 40,  # the server returns at once (test_fuzz_command): its set-up is fuzzed
 }
-"""Invocations per command in the normal suite (2,593 in all)."""
+"""Invocations per command in the normal suite (2,633 in all)."""
 TOTAL = int(os.environ.get("SWARMTAG_FUZZ_EXAMPLES", "0")) or sum(NORMAL_EXAMPLES.values())
 """Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``."""
 HANG_SECONDS = 60
@@ -139,7 +154,10 @@ def examples(path: tuple[str, ...]) -> int:
 def walk(group: click.Group, prefix: tuple[str, ...] = ()) -> dict[tuple[str, ...], click.Command]:
     """Every command under ``group``, by its words (``("study", "run")``)."""
     found: dict[tuple[str, ...], click.Command] = {}
-    for name, command in group.commands.items():
+    context = click.Context(group)  # the root group loads its commands when asked
+    for name in group.list_commands(context):
+        command = group.get_command(context, name)
+        assert command is not None, name
         if isinstance(command, click.Group):
             found.update(walk(command, (*prefix, name)))
         else:
@@ -174,12 +192,14 @@ def templates(tmp_path_factory) -> dict[str, Path]:
     (folder / "study.toml").write_text(TINY_STUDY, encoding="utf-8")
     (folder / "targets.toml").write_text(TINY_TARGETS, encoding="utf-8")
     (folder / "scenario.toml").write_text(TINY_SCENARIO, encoding="utf-8")
+    (folder / "warehouse.toml").write_text(TINY_WAREHOUSE, encoding="utf-8")
     profile = profile_path("base").read_text(encoding="utf-8")
     (folder / "profile.toml").write_text(profile.replace('name = "base"', 'name = "mine"'))
     run_study(load_study(str(folder / "study.toml")), out_dir=folder / "results", workers=1)
     make_tag_files(folder)
     write_fuzz_bags(folder)  # trial.mcap, trial.db3, bag/ and mapping.toml
-    make_camera_files(folder)  # camera.png, small.png, under.png and rig.toml
+    make_camera_files(folder)  # camera.png, small.png, under.png, one.png, cut.png, rig.toml
+    make_cache_file(folder)  # cache.jsonl
     return {path.name: path for path in folder.iterdir()}
 
 
@@ -251,6 +271,11 @@ def invocations(draw: st.DrawFn, path: tuple[str, ...]) -> Invocation:
     keys = call.given.get("key_file", [])
     if path == ("tag", "write") and not call.given.get("counter_file") and keys:
         call.outputs.append(("file", f"{word(keys[-1])}.counters"))  # next to the key file
+    if path == ("console",):  # the audit log and the counters go next to the token file
+        token = Path(word((call.given.get("token_file") or [DEFAULT_TOKEN_FILE])[-1]))
+        for name, default in (("audit_log", DEFAULT_AUDIT_LOG), ("counter_file", COUNTERS)):
+            if not call.given.get(name):
+                call.outputs.append(("optional", str(token.parent / default)))
     if path == ("calibrate",) and not call.given.get("cache_path") and out:
         with contextlib.suppress(ValueError):  # a name calibrate refuses anyway
             call.outputs.append(("optional", str(default_cache_path(Path(word(out[-1]))))))
@@ -547,7 +572,11 @@ def fuzz(path: tuple[str, ...], strategy: st.SearchStrategy[Invocation], fuzzer:
     def one(call: Invocation) -> None:
         fuzzer.run(call)
 
-    one()
+    try:
+        one()
+    except BaseException as exc:
+        exc.add_note(f"seed: SWARMTAG_FUZZ_SEED={SEED}")  # pytest shows notes with the error
+        raise
     assert fuzzer.count >= 1, f"{' '.join(path) or 'swarmtag'}: no invocation was generated"
     print(fuzzer.summary(path))  # shown by -rP
 
@@ -569,6 +598,9 @@ def test_every_command_and_option_is_fuzzed():
 
 @pytest.mark.parametrize("path", sorted(COMMANDS), ids=" ".join)
 def test_fuzz_command(path, fuzzer):
+    if path == ("console",):  # everything up to serving: the server stops as soon as it starts
+        uvicorn = pytest.importorskip("uvicorn")
+        fuzzer.monkeypatch.setattr(uvicorn.Server, "run", lambda _server, sockets=None: None)
     fuzz(path, invocations(path), fuzzer)
 
 

@@ -8,14 +8,16 @@ import click
 import pytest
 from click.testing import CliRunner
 
-from swarmtag.cli._main import app
+from swarmtag.cli._main import COMMANDS, app
 
 CLI = Path(__file__).parents[2] / "src" / "swarmtag" / "cli"
 
 
 def _paths(group: click.Group, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
     found = [prefix]
-    for name, command in group.commands.items():
+    context = click.Context(group)
+    for name in group.list_commands(context):
+        command = group.get_command(context, name)
         if isinstance(command, click.Group):
             found += _paths(command, (*prefix, name))
         else:
@@ -39,3 +41,27 @@ def test_no_command_prints_a_spec_section():
         if "SPEC §" in line
     ]
     assert cited == []
+
+
+@pytest.mark.parametrize("name", sorted(COMMANDS))
+def test_the_root_help_lists_each_command_by_its_own_first_sentence(name):
+    # swarmtag --help lists the commands without importing them: from COMMANDS
+    command = app.get_command(click.Context(app), name)
+    assert command is not None
+    assert command.name == name
+    assert command.get_short_help_str(limit=1000) == COMMANDS[name].summary
+
+
+def test_the_root_help_imports_no_command(tmp_path):
+    import subprocess
+    import sys
+
+    probe = (
+        "import sys; from swarmtag.cli import main\n"
+        "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
+        "print(sorted(m for m in sys.modules if m.startswith(('swarmtag.cli.', 'numpy'))))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True
+    )
+    assert result.stdout.strip().splitlines()[-1] == "['swarmtag.cli._main']"

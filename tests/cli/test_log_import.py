@@ -240,3 +240,38 @@ def test_log_import_of_clashing_condition_files_is_one_line_naming_them(tmp_path
     assert err.endswith("; import each on its own\n")
     assert err.count("\n") == 1
     assert not events.exists()
+
+
+def test_a_bag_with_service_events_imports_and_names_the_skipped_topic(tmp_path, capsys):
+    from tests.io.bag_builders import SERVICE_TOPIC, SERVICE_TYPE, write_mcap_file
+
+    bag = write_mcap_file(tmp_path / "all.mcap", TOPICS, lab_session())
+    events = tmp_path / "e.csv"
+    code, out, err = run(capsys, "log", "import", str(bag), "--events", str(events))
+    assert (code, err) == (0, "")
+    assert out.splitlines()[1] == (
+        f"{bag}: skipped 1 topic(s) that hold no plain messages (not read): "
+        f"{SERVICE_TOPIC} ({SERVICE_TYPE}: service events)"
+    )
+    assert events.read_text(encoding="utf-8") == format_csv(LAB_LOG)
+
+
+def test_a_bag_read_short_of_its_metadata_count_exits_2_and_writes_nothing(tmp_path, capsys):
+    bag = write_bag(tmp_path / "bag", "mcap", TOPICS, lab_session())
+    metadata = bag / "metadata.yaml"
+    text = metadata.read_text(encoding="utf-8")
+    metadata.write_text(text.replace("message_count: 5\n", "message_count: 31\n"), "utf-8")
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    table = out_dir / "t.csv"
+    code, out, err = run(
+        capsys, "log", "import", str(bag), "--events", str(out_dir / "e.csv"),
+        "--event-table", str(table),
+    )  # fmt: skip
+    assert (code, out) == (2, "")
+    assert err == (
+        f"swarmtag: error: {bag}: topic /swarmtag/robot_events: read 5 message(s), but "
+        "metadata.yaml counts 31; the bag is damaged or its records disagree, so nothing is "
+        "imported\n"
+    )
+    assert list(out_dir.iterdir()) == []

@@ -579,3 +579,82 @@ def test_the_console_script_skips_the_last_collections_at_exit():
     code = code.replace("main()", "main(['--version'])")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.splitlines()[-1] == "frozen False", done.stdout
+
+
+# -- Ctrl-C inside one long call of compiled code: route search, marker detection -------------
+
+
+def _aisles_map(side: int) -> str:
+    """A ``side`` x ``side`` floor of short shelf rows, four destinations in the corners."""
+    rows = []
+    for r in range(side):
+        line = ["."] * side
+        if r % 4 == 1:
+            for c in range(2, side - 2, 6):
+                line[c] = line[c + 1] = "#"
+        rows.append(line)
+    for c in range(0, 40, 2):
+        rows[-1][c] = "P"
+    rows[0][-1], rows[-1][-1], rows[0][0], rows[side // 2][side // 2] = "0", "1", "2", "3"
+    return "\n".join("".join(line) for line in rows) + "\n"
+
+
+def _interrupted_at(argv: list[str], folder: Path, moment: float) -> tuple[int, float, str]:
+    """Run ``argv`` in ``folder``, SIGINT its group at ``moment`` s: (status, s to exit, stderr)."""
+    child = subprocess.Popen(
+        [str(SCRIPT), *argv],
+        cwd=folder,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    time.sleep(moment)
+    assert child.poll() is None, "finished before the signal"
+    sent = time.monotonic()
+    os.killpg(child.pid, signal.SIGINT)
+    _, err = child.communicate(timeout=HUNG_S)
+    exit_s = time.monotonic() - sent
+    while _alive_in_group(child.pid) and time.monotonic() - sent < HUNG_S:
+        time.sleep(0.005)
+    return child.returncode, max(exit_s, time.monotonic() - sent), err.decode(errors="replace")
+
+
+def test_ctrl_c_while_a_large_map_s_routes_are_searched(tmp_path):
+    # 2048 x 2048 cells, four destinations: the routes take seconds of compiled code,
+    # searched in a worker process (sim.config.routes); the command must stop at once.
+    (tmp_path / "hall.txt").write_text(_aisles_map(2048))
+    argv = "simulate --profile lab --robots 8 --ticks 30 --runs 1 --resamples 10 --no-progress"
+    argv += " --set warehouse.map=hall.txt --events events.csv"
+    for moment in (2.5, 5.0, 7.5):
+        status, exit_s, err = _interrupted_at(argv.split(), tmp_path, moment)
+        assert status == 130, err
+        assert err.strip().splitlines()[-1] == "swarmtag: error: aborted"
+        assert exit_s < LIMIT_S, f"{exit_s:.2f} s after a SIGINT at {moment} s"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["hall.txt"]
+
+
+def test_ctrl_c_while_markers_are_searched_in_a_large_image(tmp_path):
+    # A 10000 x 10000 image of random blocks: OpenCV's search takes seconds in one call.
+    pytest.importorskip("cv2")
+    import cv2
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    blocks = rng.integers(0, 2, (1250, 1250), dtype=np.uint8) * 255
+    image = np.kron(blocks, np.ones((8, 8), dtype=np.uint8))
+    assert cv2.imwrite(str(tmp_path / "big.png"), image)
+    (tmp_path / "big.toml").write_text(
+        "[intrinsics]\nwidth = 10000\nheight = 10000\nhorizontal_fov = 60.0\n"
+        '[[cameras]]\nname = "front"\nposition = [0.12, 0.0, 0.10]\n'
+    )
+    argv = ["aruco", "detect", "big.png", "--camera", "big.toml"]
+    begin = time.monotonic()
+    reference = subprocess.run([str(SCRIPT), *argv], cwd=tmp_path, capture_output=True, check=True)
+    duration = time.monotonic() - begin
+    assert b"marker(s)" in reference.stdout
+    for share in (0.4, 0.55, 0.7):
+        status, exit_s, err = _interrupted_at(argv, tmp_path, share * duration)
+        assert status == 130, err
+        assert err.strip().splitlines()[-1] == "swarmtag: error: aborted"
+        assert exit_s < LIMIT_S, f"{exit_s:.2f} s after a SIGINT at {share * duration:.2f} s"

@@ -223,3 +223,45 @@ def write_fuzz_bags(folder: Path) -> None:
     write_bag(folder / "trial.db3", "db3", TOPICS, session)
     write_bag(folder / "bag", "sqlite3", TOPICS, session)
     (folder / "mapping.toml").write_text(default_mapping().read_text(encoding="utf-8"))
+
+
+SERVICE_TOPIC = "/add_two_ints/_service_event"
+SERVICE_TYPE = "example_interfaces/srv/AddTwoInts_Event"
+SERVICE_SCHEMA = "int64 a\n---\nint64 sum\n"
+"""A service-event channel as ``ros2 bag record --all`` writes one (its schema is the .srv text)."""
+
+
+def write_mcap_file(
+    path: Path,
+    topics: dict[str, str],
+    messages: Sequence[Message],
+    *,
+    with_service: bool = True,
+    store: Any = None,
+) -> Path:
+    """``messages`` as one MCAP file written with Foxglove's writer (every CRC), with a
+    service-event channel (``SERVICE_TOPIC``, two events) among the message channels.
+    """
+    from mcap.writer import Writer
+
+    store = store or typestore()
+    with path.open("wb") as handle:
+        writer = Writer(handle, enable_data_crcs=True)
+        writer.start(profile="ros2", library="tests")
+        channels = {}
+        for topic, msgtype in topics.items():
+            text, _ = store.generate_msgdef(msgtype, ros_version=2)
+            schema = writer.register_schema(msgtype, "ros2msg", text.encode())
+            channels[topic] = writer.register_channel(topic, "cdr", schema)
+        if with_service:
+            schema = writer.register_schema(SERVICE_TYPE, "ros2msg", SERVICE_SCHEMA.encode())
+            service = writer.register_channel(SERVICE_TOPIC, "cdr", schema)
+            for at in (T0 + SEC, T0 + 2 * SEC):
+                writer.add_message(
+                    service, log_time=at, data=b"\x00\x01\x00\x00" + bytes(8), publish_time=at
+                )
+        for topic, at, message in messages:
+            data = bytes(store.serialize_cdr(message, topics[topic]))
+            writer.add_message(channels[topic], log_time=at, data=data, publish_time=at)
+        writer.finish()
+    return path

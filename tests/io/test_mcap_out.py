@@ -159,3 +159,96 @@ def test_an_unwritable_place_is_one_line(tmp_path):
         McapRecorder(tmp_path / "file" / "run.mcap"),
     ):
         pass
+
+
+# --- checksums: written, checked by an independent reader, and refused when they fail ----------
+
+
+def summary_of(path):
+    from mcap.reader import make_reader
+
+    with path.open("rb") as handle:
+        reader = make_reader(handle)
+        summary = reader.get_summary()
+        assert summary is not None
+        return summary
+
+
+def footer_of(data: bytes):
+    """(summary start, summary CRC) from the footer (the last 37 bytes)."""
+    import struct
+
+    summary_start, _, crc = struct.unpack_from("<QQI", data, len(data) - 8 - 20)
+    return summary_start, crc
+
+
+def test_every_crc_is_written_and_foxglove_s_reader_validates_them(tmp_path):
+    import zlib
+
+    from mcap.reader import NonSeekingReader
+    from mcap.records import Chunk, DataEnd
+    from mcap.stream_reader import StreamReader
+
+    path = tmp_path / "run.mcap"
+    record(path)
+    data = path.read_bytes()
+    with path.open("rb") as handle:
+        records = list(StreamReader(handle, emit_chunks=True).records)
+    chunks = [r for r in records if isinstance(r, Chunk)]
+    (data_end,) = [r for r in records if isinstance(r, DataEnd)]
+    assert chunks
+    assert all(chunk.uncompressed_crc != 0 for chunk in chunks)
+    assert data_end.data_section_crc != 0
+    summary_start, summary_crc = footer_of(data)
+    assert summary_crc == zlib.crc32(data[summary_start : len(data) - 12])
+    with path.open("rb") as handle:  # chunk and data-section CRCs checked by mcap itself
+        messages = list(NonSeekingReader(handle, validate_crcs=True).iter_messages())
+    assert len(messages) == 17
+
+
+def flipped(path, offset: int):
+    data = bytearray(path.read_bytes())
+    data[offset] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("where", [0.25, 0.5, 0.9])
+def test_a_byte_flipped_inside_a_chunk_is_refused_naming_the_chunk(tmp_path, where):
+    path = tmp_path / "run.mcap"
+    record(path)
+    (chunk,) = summary_of(path).chunk_indexes
+    header = 1 + 8 + 8 + 8 + 8 + 4 + 4 + len(chunk.compression) + 8
+    inside = chunk.chunk_start_offset + header + int(chunk.compressed_size * where)
+    flipped(path, inside)
+    with pytest.raises(BagError) as error:
+        read_bag(path, with_events=True)
+    message = str(error.value)
+    assert message.startswith(f"{path}: damaged: the chunk at byte {chunk.chunk_start_offset} ")
+    assert "\n" not in message
+
+
+def test_a_byte_flipped_in_the_summary_is_refused_naming_it(tmp_path):
+    path = tmp_path / "run.mcap"
+    record(path)
+    data = path.read_bytes()
+    summary_start, _ = footer_of(data)
+    inside = data.index(b"uint8 urgency", summary_start) + 6  # a schema's text: still parses
+    flipped(path, inside)
+    with pytest.raises(BagError) as error:
+        read_bag(path)
+    assert str(error.value).startswith(
+        f"{path}: damaged: the summary section at byte {summary_start} fails its CRC (stored "
+    )
+
+
+def test_a_byte_flipped_in_the_data_section_outside_chunks_is_refused(tmp_path):
+    path = tmp_path / "run.mcap"
+    record(path)
+    data = path.read_bytes()
+    (chunk,) = summary_of(path).chunk_indexes
+    index_at = chunk.chunk_start_offset + chunk.chunk_length  # the message indexes that follow
+    flipped(path, index_at + 1 + 8 + 2 + 4 + 3)  # inside the first index's first timestamp
+    summary_start, _ = footer_of(data)
+    with pytest.raises(BagError, match=r"damaged: the data section before byte \d+ fails its CRC"):
+        read_bag(path)
+    assert index_at < summary_start

@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from swarmtag.errors import PolicyError
 from swarmtag.policy import (
     EDF_KIND,
     PROXIMITY_KIND,
@@ -18,6 +19,7 @@ from swarmtag.policy import (
     Weighted,
     kernel_score,
 )
+from swarmtag.policy._kernel import kernel_score as plain_kernel_score
 
 policies = st.one_of(
     st.just(Proximity()),
@@ -45,7 +47,7 @@ def test_kernel_score_is_the_score_bit_for_bit(policy, urgency, distance):
 
 def test_compiled_kernel_score_agrees():
     numba = pytest.importorskip("numba", reason="the compiled form needs the fast extra (numba)")
-    compiled = numba.njit(kernel_score)
+    compiled = numba.njit(plain_kernel_score)  # what the compiled simulator takes
     rng = np.random.default_rng(0)
     urgency = rng.integers(0, 10, 2000).astype(np.float64)
     distance = rng.random(2000) * 6.0
@@ -56,3 +58,13 @@ def test_compiled_kernel_score_agrees():
             [compiled(kind, parameter, u, d) for u, d in zip(urgency, distance, strict=True)]
         )
         assert np.array_equal(got, expected)
+
+
+@pytest.mark.parametrize(
+    ("kind", "parameter", "urgency", "distance"),
+    [(7, 0.5, 4.0, 1.0), (1, float("nan"), 4.0, 1.0), (1, 0.5, 10.0, 1.0), (1, 0.5, 4.0, -1.0),
+     (1, 0.5, None, 1.0), (np.array([]), 0.5, 4.0, 1.0), (1, 0.5, 4.0, float("nan"))],
+)  # fmt: skip
+def test_the_public_kernel_score_checks_its_arguments(kind, parameter, urgency, distance):
+    with pytest.raises(PolicyError):
+        kernel_score(kind, parameter, urgency, distance)

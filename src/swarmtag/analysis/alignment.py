@@ -19,6 +19,8 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmtag._checks import check_array, check_instance, show
+from swarmtag.analysis._validation import check_thresholds
 from swarmtag.analysis.runs import ConditionRuns
 from swarmtag.errors import StatisticsError
 
@@ -46,8 +48,8 @@ def alignment_k(p: int, n: ArrayLike) -> NDArray[np.int64]:
     array([7, 3, 1])
     """
     if isinstance(p, bool) or not isinstance(p, int | np.integer) or not 0 <= p <= 100:
-        raise StatisticsError(f"PA threshold {p!r} is not an integer percentage in 0-100")
-    counts = np.asarray(n, dtype=np.int64)
+        raise StatisticsError(f"PA threshold {show(p)} is not an integer percentage in 0-100")
+    counts: NDArray[np.int64] = check_array("n", n, integer=True, low=0, error=StatisticsError)
     return np.maximum(1, -((-int(p) * counts) // 100))
 
 
@@ -95,6 +97,14 @@ def priority_alignment(
     >>> priority_alignment(ConditionRuns.from_log(log, "c"), [25, 50, 75, 100])
     array([[0.  , 0.5 , 1.  , 0.75]])
     """
+    check_instance("runs", runs, ConditionRuns, error=StatisticsError)
+    thresholds = check_thresholds("thresholds", thresholds)
+    if urgency is not None:
+        urgency = check_array("urgency", urgency, integer=True, error=StatisticsError)
+        if urgency.shape != runs.urgency0.shape:
+            raise StatisticsError(
+                f"urgency: {urgency.size} values for {runs.urgency0.size} carrier rows"
+            )
     urgency_rank, delivery_rank = within_run_ranks(runs, urgency)
     per_run = runs.carriers_per_run()
     delivered = runs.delivered

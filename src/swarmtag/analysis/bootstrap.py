@@ -23,9 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmtag._checks import check_array, check_instance
 from swarmtag._resources import check_memory
 from swarmtag.analysis._kernels import use_compiled
-from swarmtag.analysis._validation import check_options
+from swarmtag.analysis._validation import check_compiled, check_level, check_options
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS
 from swarmtag.analysis.censoring import km_resampled_quantiles
 from swarmtag.analysis.curves import LATENCY_PERCENTILES, Curve, interval_percentiles
@@ -75,11 +76,15 @@ def percentile_interval(
     >>> percentile_interval([np.nan, np.nan])
     ConfidenceInterval(low=None, high=None)
     """
-    values = np.asarray(replicates, dtype=np.float64)
+    level = check_level(confidence_level)
+    values = check_array("replicates", replicates, nan=True, error=StatisticsError)
     defined = values[~np.isnan(values)]
     if defined.size == 0:
         return ConfidenceInterval(low=None, high=None)
-    low, high = np.percentile(defined, interval_percentiles(confidence_level))
+    with np.errstate(over="ignore", invalid="ignore"):  # judged just below
+        low, high = np.percentile(defined, interval_percentiles(level))
+    if not low <= high:  # the spread overflowed float64 (values near ±1.8e308)
+        raise StatisticsError("replicates: their spread overflows float64; rescale them first")
     return ConfidenceInterval(low=float(low), high=float(high))
 
 
@@ -298,6 +303,7 @@ def condition_statistics(
     A request that cannot fit in memory is refused before anything is drawn
     (``swarmtag.errors.ResourceError``, see ``bootstrap_memory``).
     """
+    check_instance("runs", runs, ConditionRuns, error=StatisticsError)
     check_options(
         n_resamples=n_resamples,
         seed=seed,
@@ -305,6 +311,7 @@ def condition_statistics(
         curve_thresholds=curve_thresholds,
         curve_percentiles=curve_percentiles,
     )
+    check_compiled(compiled)
     estimate = bootstrap_memory(
         n_resamples,
         conditions=1,

@@ -27,9 +27,11 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._checks import check_instance, check_number
 from swarmtag.analysis._kernels import km_reached
 from swarmtag.analysis.latency import SortedLatencies
 from swarmtag.analysis.runs import ConditionRuns
+from swarmtag.errors import StatisticsError
 
 __all__ = [
     "KM_TOLERANCE",
@@ -62,6 +64,7 @@ def run_ends(runs: ConditionRuns) -> tuple[NDArray[np.float64], NDArray[np.bool_
     >>> run_ends(ConditionRuns.from_log(log, "c"))
     (array([9., 0.]), array([False, False]))
     """
+    check_instance("runs", runs, ConditionRuns, error=StatisticsError)
     recorded = np.zeros(runs.n_runs, dtype=bool)
     given = ~np.isnan(runs.run_end)
     recorded[runs.run_index[given]] = True
@@ -105,6 +108,7 @@ def censored_latencies(runs: ConditionRuns) -> CensoredLatencies:
     >>> censored_latencies(ConditionRuns.from_log(log, "c")).values
     array([ 8., 25.])
     """
+    check_instance("runs", runs, ConditionRuns, error=StatisticsError)
     ends, recorded = run_ends(runs)
     delivered = runs.delivered
     value = np.where(delivered, runs.delivery_time, ends[runs.run_index]) - runs.order_time
@@ -160,6 +164,8 @@ def km_quantile(latencies: CensoredLatencies, q: float = 95) -> float | None:
     >>> km_quantile(latencies, 50), km_quantile(latencies, 95) is None
     (7.0, True)
     """
+    check_instance("latencies", latencies, CensoredLatencies, error=StatisticsError)
+    q = check_number("q", q, low=0.0, high=100.0, error=StatisticsError)
     values = latencies.values
     if values.size == 0:
         return None

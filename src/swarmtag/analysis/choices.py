@@ -36,6 +36,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._checks import check_array, check_instance, check_sequence, check_text, show
 from swarmtag._resources import check_memory
 from swarmtag.analysis._validation import check_options
 from swarmtag.analysis.bootstrap import Estimate, percentile_interval
@@ -86,6 +87,16 @@ def double_pursuits(
     ...     np.array([5, 5, 5, 5]), np.array([0, 1, 0, 2]))
     array([False,  True, False,  True])
     """
+    run, carrier, robot = (
+        check_array(name, value, integer=True, error=StatisticsError)
+        for name, value in (("run", run), ("carrier", carrier), ("robot", robot))
+    )
+    time = check_array("time", time, error=StatisticsError)
+    kind = np.asarray(kind)
+    if kind.ndim != 1 or kind.dtype.kind != "U":
+        raise StatisticsError(f"kind: {show(kind)} is not a 1-D sequence of event kinds")
+    if len({len(run), len(time), len(kind), len(carrier), len(robot)}) != 1:
+        raise StatisticsError("run, time, kind, carrier and robot differ in length")
     rows = np.flatnonzero(np.isin(kind, list(_PHASES)))
     result = np.zeros(len(kind), dtype=bool)
     if rows.size == 0:
@@ -386,6 +397,14 @@ def choice_statistics(
     >>> choices.total("selections"), choices.shares, choices.total("double_pursuits")
     (2, (0.5, 0.5, 0.0), 1)
     """
+    check_instance("events", events, EventTable, error=StatisticsError)
+    if log is not None:
+        check_instance("log", log, CarrierLog, error=StatisticsError)
+    if conditions is not None:
+        conditions = [
+            check_text("conditions", name, error=StatisticsError)
+            for name in check_sequence("conditions", conditions, error=StatisticsError)
+        ]
     check_options(n_resamples=n_resamples, seed=seed, confidence_level=confidence_level)
     present = log.conditions if log is not None else tuple(np.unique(events.condition).tolist())
     names = list(present) if conditions is None else list(conditions)

@@ -33,6 +33,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmtag._checks import check_array, check_instance, check_text
 from swarmtag.analysis.bootstrap import (
     ConditionStatistics,
     ConfidenceInterval,
@@ -79,27 +80,29 @@ def bootstrap_p_value(differences: ArrayLike) -> float | None:
     >>> bootstrap_p_value([np.nan]) is None
     True
     """
-    values = np.asarray(differences, dtype=np.float64)
+    values = check_array("differences", differences, nan=True, error=StatisticsError)
     defined = values[~np.isnan(values)]
     if defined.size == 0:
         return None
     below = int(np.count_nonzero(defined <= 0))
     above = int(np.count_nonzero(defined >= 0))
-    return min(1.0, 2 * min(below, above) / defined.size)
+    return min(1.0, 2 * min(below, above) / int(defined.size))
 
 
-def mann_whitney_p(x: ArrayLike, y: ArrayLike) -> float | None:
+def mann_whitney_p(x: ArrayLike | None, y: ArrayLike | None) -> float | None:
     """Two-sided Mann-Whitney U p-value (scipy's defaults), NaN values left out.
 
-    ``None`` when either sample has no value.
+    ``None`` when either sample is ``None`` or has no value.
 
     >>> mann_whitney_p([1.0, 2.0, 3.0], [1.0, 2.0, 3.0])
     1.0
     >>> mann_whitney_p([1.0], [np.nan]) is None
     True
     """
-    first = np.asarray(x, dtype=np.float64)
-    second = np.asarray(y, dtype=np.float64)
+    if x is None or y is None:  # a metric without per-run values (the KM P95)
+        return None
+    first = check_array("x", x, nan=True, error=StatisticsError)
+    second = check_array("y", y, nan=True, error=StatisticsError)
     first = first[~np.isnan(first)]
     second = second[~np.isnan(second)]
     if first.size == 0 or second.size == 0:
@@ -145,6 +148,8 @@ def undelivered_differs(condition: ConditionKPIs, baseline: ConditionKPIs) -> bo
 
     With the same number of carriers on both sides, whether the counts differ.
     """
+    check_instance("condition", condition, ConditionKPIs, error=StatisticsError)
+    check_instance("baseline", baseline, ConditionKPIs, error=StatisticsError)
     return condition.undelivered * baseline.carriers != baseline.undelivered * condition.carriers
 
 
@@ -152,6 +157,9 @@ def compare(
     condition: ConditionStatistics, baseline: ConditionStatistics, metric: str
 ) -> Comparison:
     """Compare ``condition`` with ``baseline`` on ``metric`` (one both of them have)."""
+    check_instance("condition", condition, ConditionStatistics, error=StatisticsError)
+    check_instance("baseline", baseline, ConditionStatistics, error=StatisticsError)
+    check_text("metric", metric, error=StatisticsError)
     if condition.n_resamples != baseline.n_resamples:
         raise StatisticsError(
             f"{condition.condition} has {condition.n_resamples} resamples but the baseline "
@@ -188,6 +196,8 @@ def compare_all(
     condition: ConditionStatistics, baseline: ConditionStatistics
 ) -> tuple[Comparison, ...]:
     """``compare`` for every metric both have, in the order of ``METRICS`` (then optional ones)."""
+    check_instance("condition", condition, ConditionStatistics, error=StatisticsError)
+    check_instance("baseline", baseline, ConditionStatistics, error=StatisticsError)
     return tuple(
         compare(condition, baseline, metric)
         for metric in condition.metrics

@@ -20,10 +20,13 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._checks import check_instance
+from swarmtag.analysis._validation import check_thresholds
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS, PA_THRESHOLDS, priority_alignment
 from swarmtag.analysis.censoring import CensoredLatencies, censored_latencies, km_quantile
 from swarmtag.analysis.latency import SortedLatencies, segment_percentile, sorted_latencies
 from swarmtag.analysis.runs import ConditionRuns
+from swarmtag.errors import StatisticsError
 from swarmtag.io.schema import MISSING_ID
 
 __all__ = [
@@ -131,6 +134,8 @@ def run_values(
     runs: ConditionRuns, *, curve_thresholds: Sequence[int] = CURVE_THRESHOLDS
 ) -> RunValues:
     """All per-run values of a condition, vectorised over runs."""
+    check_instance("runs", runs, ConditionRuns, error=StatisticsError)
+    check_thresholds("curve_thresholds", curve_thresholds)
     latencies = sorted_latencies(runs)
     deliveries = latencies.per_run
     by_run = latencies.by_run()
@@ -248,6 +253,7 @@ def condition_kpis(values: RunValues) -> ConditionKPIs:
     >>> kpis.mean_latency, kpis.throughput, kpis.deliveries_per_run, kpis.undelivered
     (25.0, 10.0, 1.0, 1)
     """
+    check_instance("values", values, RunValues, error=StatisticsError)
     pooled = values.latencies.values
     with_throughput = values.throughput[~np.isnan(values.throughput)]
     total = int(values.deliveries.sum())

@@ -15,7 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._checks import check_instance, check_int, check_sequence
 from swarmtag.analysis.runs import ConditionRuns
+from swarmtag.errors import StatisticsError
 
 __all__ = [
     "SortedLatencies",
@@ -145,6 +147,11 @@ def latency_by_urgency(
     >>> latency_by_urgency(ConditionRuns.from_log(log, "c"), levels=[9])
     (UrgencyLatency(urgency=9, carriers=2, delivered=2, mean=30.0, median=30.0, p95=39.0),)
     """
+    check_instance("runs", runs, ConditionRuns, error=StatisticsError)
+    levels = [
+        check_int("levels", level, low=0, high=9, error=StatisticsError)
+        for level in check_sequence("levels", levels, error=StatisticsError)
+    ]
     delivered = runs.delivered
     latency = runs.delivery_time - runs.order_time
     result = []

@@ -35,11 +35,13 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._checks import MAX_SEED, check_int, check_text
 from swarmtag._interrupt import checkpoint
 from swarmtag.analysis._kernels import PERCENTILE_ROWS, count_draws, weighted_percentiles
 from swarmtag.analysis.alignment import CURVE_THRESHOLDS
 from swarmtag.analysis.curves import LATENCY_PERCENTILES
 from swarmtag.analysis.kpis import METRICS, OPTIONAL_METRICS
+from swarmtag.errors import StatisticsError
 
 __all__ = [
     "CHUNK_ELEMENTS",
@@ -138,6 +140,8 @@ def condition_seed_sequence(seed: int, condition: str) -> np.random.SeedSequence
     ...     0, "proximity").spawn_key
     True
     """
+    check_int("seed", seed, low=0, high=MAX_SEED, error=StatisticsError)
+    check_text("condition", condition, error=StatisticsError)
     digest = hashlib.sha256(condition.encode("utf-8")).digest()
     return np.random.SeedSequence(seed, spawn_key=(int.from_bytes(digest[:8], "little"),))
 

@@ -12,6 +12,7 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._checks import check_instance
 from swarmtag.errors import StatisticsError
 from swarmtag.io.tables import CarrierLog
 
@@ -102,4 +103,5 @@ class ConditionRuns:
 
 def split_conditions(log: CarrierLog) -> dict[str, ConditionRuns]:
     """Every condition of the log, in sorted order of their names."""
+    check_instance("log", log, CarrierLog, error=StatisticsError)
     return {name: ConditionRuns.from_log(log, name) for name in log.conditions}

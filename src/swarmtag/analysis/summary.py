@@ -13,10 +13,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
-from swarmtag._checks import show
+from swarmtag._checks import check_instance, check_sequence, check_text, show
 from swarmtag._resources import check_memory
 from swarmtag.analysis._kernels import use_compiled
-from swarmtag.analysis._validation import check_options
+from swarmtag.analysis._validation import check_compiled, check_options
 from swarmtag.analysis.bootstrap import (
     ConditionStatistics,
     Estimate,
@@ -49,6 +49,12 @@ def choose_baseline(conditions: Sequence[str], requested: str | None = None) -> 
     >>> choose_baseline(["weighted:w=0.5", "weighted:w=0.1"])
     'weighted:w=0.1'
     """
+    conditions = [
+        check_text("conditions", name, error=StatisticsError)
+        for name in check_sequence("conditions", conditions, error=StatisticsError)
+    ]
+    if requested is not None:
+        check_text("baseline", requested, error=StatisticsError)
     names = sorted(conditions)
     if not names:
         raise StatisticsError("the event log has no rows: there is nothing to analyse")
@@ -167,7 +173,9 @@ def summarize(
     kept for every condition and comparison) is refused with a
     ``swarmtag.errors.ResourceError`` before any resample is drawn.
     """
+    check_instance("log", log, CarrierLog, error=StatisticsError)
     check_options(n_resamples=n_resamples, seed=seed, confidence_level=confidence_level)
+    check_compiled(compiled)
     groups = split_conditions(log)
     chosen = choose_baseline(list(groups), baseline)
     order = [chosen, *(name for name in groups if name != chosen)]

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag._checks import check_number
+from swarmtag._checks import check_instance, check_number
 from swarmtag.errors import StatisticsError
 from swarmtag.io.tables import CarrierLog
 
@@ -35,6 +35,7 @@ def trim_warmup(log: CarrierLog, warmup: float) -> CarrierLog:
     >>> trim_warmup(log, 60.0).carrier
     array([2, 3])
     """
+    check_instance("log", log, CarrierLog, error=StatisticsError)
     start = check_number("warmup", warmup, low=0.0, error=StatisticsError)
     if start == 0.0 or len(log) == 0:
         return log

@@ -16,6 +16,7 @@ from typing import Final
 
 import numpy as np
 
+from swarmtag._checks import check_instance, check_path, check_text
 from swarmtag._inputs import is_regular_file
 from swarmtag.analysis import CORE_METRICS, ConditionRuns, summarize
 from swarmtag.calibration.registry import target_path
@@ -79,6 +80,11 @@ def targets_from_log(
     CI (widened to contain the point value if it does not); a KPI the log
     leaves undefined is left out, with a note.
     """
+    check_instance("log", log, CarrierLog, error=CalibrationError)
+    check_text("source", source, error=CalibrationError)
+    check_text("source_digest", source_digest, error=CalibrationError)
+    if condition is not None:
+        check_text("condition", condition, error=CalibrationError)
     chosen = _choose_condition(log, condition, source)
     runs = ConditionRuns.from_log(log, chosen)
     carriers = runs.carriers_per_run()
@@ -128,6 +134,9 @@ def load_baseline(text: str, *, condition: str | None = None) -> Targets:
 
     ``condition`` picks an event log's condition; a target file names its own.
     """
+    text = check_path("--baseline", text, error=CalibrationError)
+    if condition is not None:
+        check_text("--condition", condition, error=CalibrationError)
     path = Path(text)
     if path.suffix.lower() in EVENT_LOG_SUFFIXES:
         if not is_regular_file(path):

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, Final, NoReturn
 
+from swarmtag._checks import check_path, show
 from swarmtag.calibration.objective import Achieved
 from swarmtag.errors import CalibrationError
 
@@ -78,7 +79,10 @@ def default_cache_path(out: Path) -> Path:
     >>> default_cache_path(Path("out/lab.toml")).as_posix()
     'out/lab.cache.jsonl'
     """
-    return out.with_name(f"{out.stem}.cache.jsonl")
+    path = Path(check_path("out", out, error=CalibrationError))
+    if not path.stem or path.name in (".", ".."):
+        raise CalibrationError(f"out: {show(str(out))} names no file to put a cache next to")
+    return path.with_name(f"{path.stem}.cache.jsonl")
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag import __version__
+from swarmtag._checks import MAX_WORKERS, check_instance, check_int, check_text, show
 from swarmtag.calibration.cache import EvaluationCache
 from swarmtag.calibration.evaluate import Evaluation, Evaluator
 from swarmtag.calibration.problem import CalibrationProblem
@@ -55,10 +56,9 @@ def check_evaluations(evaluations: int) -> int:
     ...
     swarmtag.errors.CalibrationError: --evaluations: 0 is not an integer in 1-5000
     """
-    if isinstance(evaluations, bool) or not 1 <= evaluations <= MAX_EVALUATIONS:
-        msg = f"--evaluations: {evaluations!r} is not an integer in 1-{MAX_EVALUATIONS}"
-        raise CalibrationError(msg)
-    return evaluations
+    return check_int(
+        "--evaluations", evaluations, low=1, high=MAX_EVALUATIONS, error=CalibrationError
+    )
 
 
 @dataclass(frozen=True)
@@ -146,6 +146,14 @@ def calibrate(
     profile as named) and ``command`` (the command line that re-creates it)
     into its calibration record. ``progress`` is told of every evaluation.
     """
+    check_instance("problem", problem, CalibrationProblem, error=CalibrationError)
+    check_instance("cache", cache, EvaluationCache, error=CalibrationError)
+    for label, text in (("name", name), ("description", description), ("base", base)):
+        check_text(label, text, error=CalibrationError)
+    check_text("command", command, error=CalibrationError)
+    check_int("workers", workers, low=1, high=MAX_WORKERS, error=CalibrationError)
+    if progress is not None and not callable(progress):
+        raise CalibrationError(f"progress: {show(progress)} is not callable")
     budget = check_evaluations(evaluations)
     best_so_far = [float("inf")]
     done = [0]

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
+from swarmtag._checks import check_sequence, check_text
 from swarmtag.errors import CalibrationError
 
 __all__ = ["MAX_FREE", "FreeParameter", "parse_free", "parse_free_list", "round_significant"]
@@ -97,6 +98,7 @@ def parse_free(text: str) -> FreeParameter:
     ...
     swarmtag.errors.CalibrationError: --free tick: the bounds 0.2:0.1 are empty (need LO < HI)
     """
+    check_text("--free", text, error=CalibrationError)
     key, equals, rest = text.partition("=")
     key = key.strip()
     parts = [part.strip() for part in rest.split(":")]
@@ -118,6 +120,7 @@ def parse_free(text: str) -> FreeParameter:
 
 def parse_free_list(texts: Sequence[str]) -> tuple[FreeParameter, ...]:
     """Several ``--free`` specs; refuses none, duplicates and more than ``MAX_FREE``."""
+    texts = check_sequence("--free", texts, error=CalibrationError)
     if not texts:
         msg = "no free parameters: give --free NAME=LO:HI (or a target file's calibration.free)"
         raise CalibrationError(msg)

@@ -17,10 +17,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from numbers import Real
 from typing import Final
 
+from swarmtag._checks import check_instance, check_number, check_sequence, show
 from swarmtag.analysis import ConditionRuns, condition_kpis, run_values
 from swarmtag.calibration.spec import COUNT_KPIS, KpiTarget, Setup, Targets
+from swarmtag.errors import CalibrationError
 from swarmtag.io import CarrierLog
 
 __all__ = [
@@ -54,6 +57,8 @@ def half_width(target: KpiTarget, achieved: float) -> float:
     >>> half_width(t, 5000.0), half_width(t, 4000.0)
     (107.0, 339.0)
     """
+    check_instance("target", target, KpiTarget, error=CalibrationError)
+    achieved = check_number("achieved", achieved, error=CalibrationError)
     side = target.high - target.value if achieved >= target.value else target.value - target.low
     return max(side, HALF_WIDTH_FLOOR * abs(target.value), ABSOLUTE_FLOOR)
 
@@ -65,9 +70,19 @@ def residual(target: KpiTarget, achieved: float | None) -> float | None:
     >>> residual(t, 5086.0), residual(t, 4300.0), residual(t, None)
     (1.0, -2.0029498525073746, None)
     """
-    if achieved is None or not math.isfinite(achieved):
+    check_instance("target", target, KpiTarget, error=CalibrationError)
+    given: object = achieved  # checked as what it is, not as annotated
+    if given is None:
         return None
-    return (achieved - target.value) / half_width(target, achieved)
+    if isinstance(given, bool) or not isinstance(given, Real):
+        raise CalibrationError(f"achieved: {show(given)} is not a number or None")
+    try:
+        number = float(given)
+    except OverflowError:  # an integer beyond float range
+        return None
+    if not math.isfinite(number):
+        return None
+    return (number - target.value) / half_width(target, number)
 
 
 @dataclass(frozen=True)
@@ -97,6 +112,11 @@ class KpiFit:
 
 def fit_rows(targets: Targets, achieved: Achieved) -> tuple[KpiFit, ...]:
     """Every KPI of every set-up, in file order, with its achieved value and residual."""
+    check_instance("targets", targets, Targets, error=CalibrationError)
+    check_instance("achieved", achieved, Mapping, error=CalibrationError)  # type: ignore[type-abstract]
+    for setup in targets.setups:
+        if not isinstance(achieved.get(setup.name), Mapping):
+            raise CalibrationError(f"achieved: no KPI values for set-up {setup.name!r}")
     rows = []
     for setup in targets.setups:
         values = achieved[setup.name]
@@ -113,6 +133,8 @@ def objective(rows: tuple[KpiFit, ...]) -> float:
     >>> objective((KpiFit("a", t, 1.0, residual(t, 1.0)), KpiFit("a", t, 0.0, residual(t, 0.0))))
     5.0
     """
+    for row in check_sequence("rows", rows, error=CalibrationError):
+        check_instance("rows", row, KpiFit, error=CalibrationError)
     return math.fsum(row.contribution for row in rows)
 
 

@@ -11,6 +11,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Final
 
+from swarmtag._checks import check_text
 from swarmtag.errors import CalibrationError
 
 __all__ = ["TARGETS", "target_path"]
@@ -30,6 +31,7 @@ def target_path(name: str) -> Path:
     >>> target_path("lab").name
     'lab.toml'
     """
+    check_text("--baseline", name, error=CalibrationError)
     if name not in TARGETS:
         msg = f"--baseline {name!r}: not a file, and no shipped baseline has that name "
         msg += f"(shipped: {', '.join(TARGETS)})"

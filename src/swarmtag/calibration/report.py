@@ -10,8 +10,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Final
 
+from swarmtag._checks import check_instance
 from swarmtag.calibration.fit import SIGNIFICANT_DIGITS, CalibrationResult
 from swarmtag.calibration.objective import UNDEFINED_PENALTY, KpiFit
+from swarmtag.errors import CalibrationError
 
 __all__ = ["FIT_COLUMNS", "fit_table", "format_number", "markdown_report", "summary_line"]
 
@@ -53,6 +55,7 @@ def _row(fit: KpiFit) -> tuple[str, ...]:
 
 def fit_table(result: CalibrationResult) -> list[tuple[str, ...]]:
     """The rows of the fit table at the rounded point (columns ``FIT_COLUMNS``)."""
+    check_instance("result", result, CalibrationResult, error=CalibrationError)
     return [_row(fit) for fit in result.evaluation.rows]
 
 
@@ -77,6 +80,7 @@ def _markdown_table(header: tuple[str, ...], rows: Sequence[tuple[str, ...]]) ->
 
 def markdown_report(result: CalibrationResult) -> str:
     """The fit report as Markdown: baseline, free parameters, fit table and search record."""
+    check_instance("result", result, CalibrationResult, error=CalibrationError)
     problem = result.problem
     targets = problem.targets
     record = result.profile.calibration

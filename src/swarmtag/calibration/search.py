@@ -19,6 +19,7 @@ same points in the same order.
 from __future__ import annotations
 
 import importlib
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Final
@@ -26,8 +27,15 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._checks import MAX_SEED, check_int, show
+from swarmtag.errors import CalibrationError
+
 __all__ = ["SIMPLEX_STEP", "SearchResult", "SearchStep", "design_size", "search"]
 
+MAX_DIMS: Final = 100
+"""Most dimensions one search takes (a calibration fits at most ``MAX_FREE``)."""
+MAX_BUDGET: Final = 100_000
+"""Most points one search may evaluate (a calibration spends at most ``MAX_EVALUATIONS``)."""
 SIMPLEX_STEP: Final = 0.1
 """Edge of Nelder-Mead's first simplex, as a fraction of each parameter's range."""
 XATOL: Final = 1e-3
@@ -107,6 +115,18 @@ def _simplex(start: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array(vertices)
 
 
+def _objectives(values: object, count: int) -> list[float]:
+    """What ``evaluate`` returned for ``count`` points, as numbers; ``CalibrationError`` if not."""
+    try:
+        numbers = [float(value) for value in values]  # type: ignore[attr-defined]
+    except (TypeError, ValueError, OverflowError):
+        numbers = []
+    if len(numbers) != count or any(math.isnan(number) for number in numbers):
+        msg = f"evaluate returned {show(values)} for {count} points, not {count} numbers"
+        raise CalibrationError(msg)
+    return numbers
+
+
 def search(evaluate: BatchObjective, dims: int, *, budget: int, seed: int) -> SearchResult:
     """Minimise ``evaluate`` over ``[0, 1]**dims`` with at most ``budget`` distinct points.
 
@@ -115,17 +135,20 @@ def search(evaluate: BatchObjective, dims: int, *, budget: int, seed: int) -> Se
     >>> [round(u, 2) for u in result.best], result.evaluations <= 60
     ([0.3, 0.3], True)
     """
-    if dims < 1 or budget < 1:
-        msg = f"search needs dims >= 1 and budget >= 1 (got {dims}, {budget})"
-        raise ValueError(msg)
+    if not callable(evaluate):
+        raise CalibrationError(f"evaluate: {show(evaluate)} is not callable")
+    dims = check_int("dims", dims, low=1, high=MAX_DIMS, error=CalibrationError)
+    budget = check_int("budget", budget, low=1, high=MAX_BUDGET, error=CalibrationError)
+    seed = check_int("seed", seed, low=0, high=MAX_SEED, error=CalibrationError)
     steps: list[SearchStep] = []
     seen: dict[tuple[float, ...], float] = {}
     design = design_size(budget)
     points = _sobol(dims, design, seed)[:design]
-    for point, value in zip(points, evaluate(points), strict=True):
+    values = _objectives(evaluate(points), len(points))
+    for point, value in zip(points, values, strict=True):
         unit = tuple(float(u) for u in point)
-        seen[unit] = float(value)
-        steps.append(SearchStep("design", unit, float(value)))
+        seen[unit] = value
+        steps.append(SearchStep("design", unit, value))
     best_index = int(np.argmin([step.objective for step in steps]))
     message = "no budget left after the design"
 
@@ -135,7 +158,7 @@ def search(evaluate: BatchObjective, dims: int, *, budget: int, seed: int) -> Se
             return seen[unit]
         if len(steps) >= budget:
             raise _BudgetUsed
-        value = float(evaluate(np.array([unit]))[0])
+        (value,) = _objectives(evaluate(np.array([unit])), 1)
         seen[unit] = value
         steps.append(SearchStep("nelder-mead", unit, value))
         return value

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
+from swarmtag._checks import check_path, check_text
 from swarmtag._toml import read_toml
 from swarmtag.analysis import kpis as _kpis
 from swarmtag.errors import CalibrationError, ConfigError, SwarmtagError
@@ -319,6 +320,9 @@ class Targets:
 
 def read_target_file(path: str | os.PathLike[str], *, source: str | None = None) -> Targets:
     """Read and check a target file; ``source`` names it in messages (default: the path)."""
+    check_path("target file", path, error=CalibrationError)
+    if source is not None:
+        check_text("source", source, error=CalibrationError)
     data = read_toml(path, what="target file", error=CalibrationError)
     name = os.fspath(path) if source is None else source
     return Targets.from_mapping(data, source=name, source_digest=file_digest(path))

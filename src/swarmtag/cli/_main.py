@@ -2,30 +2,19 @@
 
 from __future__ import annotations
 
+import importlib
 import sys
 import warnings
 from collections.abc import Sequence
-from typing import TextIO
+from typing import NamedTuple, TextIO
 
 import click
 
-from swarmtag import __version__
 from swarmtag._checks import show
 from swarmtag._interrupt import acknowledge, checkpoint
-from swarmtag.cli.aruco import aruco
-from swarmtag.cli.calibrate import calibrate_cmd
-from swarmtag.cli.demo import demo
-from swarmtag.cli.log import log_group
-from swarmtag.cli.metrics import metrics
-from swarmtag.cli.policies import policies_cmd, policy_group
-from swarmtag.cli.profiles import profiles_cmd
-from swarmtag.cli.robot import robot
-from swarmtag.cli.simulate import simulate_cmd
-from swarmtag.cli.study import reproduce, study
-from swarmtag.cli.tag import tag
 from swarmtag.errors import BackendFallback, SwarmtagError
 
-__all__ = ["EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "app", "run"]
+__all__ = ["COMMANDS", "EXIT_BAD_INPUT", "EXIT_INTERRUPTED", "app", "run"]
 
 EXIT_BAD_INPUT = 2
 """Exit status for every refused input, ours or the CLI framework's."""
@@ -33,12 +22,120 @@ EXIT_INTERRUPTED = 130
 """Exit status after Ctrl-C (128 + SIGINT), as shells report it."""
 
 
+class Entry(NamedTuple):
+    """Where a top-level command lives, and the line ``swarmtag --help`` shows for it."""
+
+    module: str
+    attribute: str
+    summary: str
+
+
+COMMANDS: dict[str, Entry] = {
+    "aruco": Entry(
+        "swarmtag.cli.aruco",
+        "aruco",
+        "The cameras' ArUco markers (ARUCO_MIP_36h12, 50 mm): synthetic images and detection.",
+    ),
+    "calibrate": Entry(
+        "swarmtag.cli.calibrate",
+        "calibrate_cmd",
+        "Fit free parameters within bounds to a baseline; write the profile and the fit report.",
+    ),
+    "console": Entry(
+        "swarmtag.cli.console",
+        "console_cmd",
+        "Serve the operator's web console: the floor, the tags, KPIs and writes (console extra).",
+    ),
+    "demo": Entry(
+        "swarmtag.cli.demo",
+        "demo",
+        "A tour of the building blocks: tag payloads, writes, selection, trial-log metrics.",
+    ),
+    "log": Entry(
+        "swarmtag.cli.log",
+        "log_group",
+        "Trial logs: event logs from ROS 2 bags of physical (or simulated) trials.",
+    ),
+    "metrics": Entry(
+        "swarmtag.cli.metrics",
+        "metrics",
+        "KPIs of an event log EVENTS (.csv or .parquet) with 95 % bootstrap CIs over runs.",
+    ),
+    "policies": Entry(
+        "swarmtag.cli.policies",
+        "policies_cmd",
+        "List the selection rules: name, kind, definition, parameter, reference, backends.",
+    ),
+    "policy": Entry(
+        "swarmtag.cli.policies",
+        "policy_group",
+        "Work with score rules of one's own (docs/policy.md).",
+    ),
+    "profiles": Entry(
+        "swarmtag.cli.profiles",
+        "profiles_cmd",
+        "List the shipped profiles with their values, or show one profile (a name or a file).",
+    ),
+    "reproduce": Entry(
+        "swarmtag.cli.study",
+        "reproduce",
+        "Run the published studies (resuming what is stored) and write the report.",
+    ),
+    "robot": Entry(
+        "swarmtag.cli.robot",
+        "robot",
+        "The robot's controller (the behaviour tree of docs/controller.md; the robot extra).",
+    ),
+    "simulate": Entry(
+        "swarmtag.cli.simulate",
+        "simulate_cmd",
+        "Simulate conditions on a scenario and print their KPIs with 95 % CIs.",
+    ),
+    "study": Entry(
+        "swarmtag.cli.study",
+        "study",
+        "Run the published studies, or your own study files (see docs/experiments.md).",
+    ),
+    "tag": Entry(
+        "swarmtag.cli.tag",
+        "tag",
+        "The smart tag: its payload, its E-ink picture, site key files, scanning, a software tag.",
+    ),
+}
+"""The top-level commands, imported only when one is run or asked for.
+
+``swarmtag --help`` lists them from here, so that it loads neither numpy nor
+the simulator; each summary is its command's first help sentence, and a test
+(tests/cli/test_help.py) holds the two equal.
+"""
+
+
 class _Interrupted(Exception):
     """Ctrl-C inside a command, carried past click (which would print a blank line first)."""
 
 
 class _Root(click.Group):
-    """The root group: a KeyboardInterrupt in any command leaves as ``_Interrupted``."""
+    """The root group: commands load on first use; a Ctrl-C in any leaves as ``_Interrupted``."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in self.commands and cmd_name in COMMANDS:
+            entry = COMMANDS[cmd_name]
+            command = getattr(importlib.import_module(entry.module), entry.attribute)
+            self.add_command(command, cmd_name)
+        return self.commands.get(cmd_name)
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        width = formatter.width - 6 - max(map(len, COMMANDS))
+        # a help-only command per entry: click's own cutting of a summary to the width
+        rows = [
+            (name, click.Command(name, help=entry.summary).get_short_help_str(width))
+            for name, entry in sorted(COMMANDS.items())
+        ]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
 
     def invoke(self, ctx: click.Context) -> object:
         try:
@@ -51,24 +148,9 @@ class _Root(click.Group):
     cls=_Root,
     context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
-@click.version_option(__version__, prog_name="swarmtag")
+@click.version_option(package_name="swarmtag", prog_name="swarmtag")  # looked up when asked
 def app() -> None:
     """Urgency-aware robot-swarm intralogistics: tags, policies, simulation, metrics."""
-
-
-app.add_command(tag)
-app.add_command(demo)
-app.add_command(metrics)
-app.add_command(log_group)
-app.add_command(simulate_cmd)
-app.add_command(study)
-app.add_command(reproduce)
-app.add_command(policies_cmd)
-app.add_command(policy_group)
-app.add_command(profiles_cmd)
-app.add_command(calibrate_cmd)
-app.add_command(robot)
-app.add_command(aruco)
 
 
 def _one_line(text: str) -> str:

@@ -15,7 +15,7 @@ import click
 import numpy as np
 
 from swarmtag._checks import check_number
-from swarmtag._inputs import is_regular_file, regular_file
+from swarmtag._inputs import is_regular_file
 from swarmtag._outputs import OutputPlan
 from swarmtag.errors import PerceptionError
 
@@ -165,25 +165,6 @@ def render_cmd(
     )
 
 
-def _read_image(path: Path) -> Any:  # noqa: ANN401 - an 8-bit grey array
-    from swarmtag.perception._opencv import opencv  # noqa: PLC0415
-
-    cv2 = opencv()
-    file = regular_file(path, what="image", error=PerceptionError)
-    try:
-        data = file.read_bytes()
-    except OSError as problem:
-        msg = f"{path}: cannot read the image ({problem.strerror})"
-        raise PerceptionError(msg) from None
-    image = (
-        cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_GRAYSCALE) if data else None
-    )
-    if image is None:
-        msg = f"{path}: not an image OpenCV can read (PNG, JPEG, BMP, TIFF, ...)"
-        raise PerceptionError(msg)
-    return image
-
-
 def _round(values: Any, digits: int = 4) -> Any:  # noqa: ANN401 - nested lists of floats
     return np.round(np.asarray(values, dtype=np.float64), digits).tolist()
 
@@ -208,12 +189,16 @@ def detect_cmd(
     view, where the camera file gives one: map markers name no carrier).
     """
     from swarmtag.perception import centring_offset, detect_markers, fuse  # noqa: PLC0415
+    from swarmtag.perception._opencv import opencv  # noqa: PLC0415
+    from swarmtag.perception.images import check_camera, read_image  # noqa: PLC0415
 
     if heading is not None:
         heading = _number("--heading", heading, -360.0, 360.0)
     rig = _rig(camera)
     chosen = rig.camera(view) if view is not None else rig.cameras[0]
-    found = detect_markers(_read_image(image), chosen, rig.carrier)
+    check_camera(chosen, camera)
+    opencv()  # one line if the extra is missing, before the image is looked at
+    found = detect_markers(read_image(image, chosen), chosen, rig.carrier)
     carriers = fuse(found, rig.carrier, heading=heading)
     centring = centring_offset(found) if chosen.upward else None
     markers = []

@@ -65,7 +65,10 @@ def _combined(bags: Sequence[Path], logs: Sequence[BagLogs]) -> BagLogs:
         codes = np.unique(events.condition, return_inverse=True)[1]
         events = events.take(np.argsort(codes, kind="stable"))
     return BagLogs(
-        carriers=carriers.sorted(), events=events, trials=sum(one.trials for one in logs)
+        carriers=carriers.sorted(),
+        events=events,
+        trials=sum(one.trials for one in logs),
+        skipped=tuple(topic for one in logs for topic in one.skipped),
     )
 
 
@@ -114,7 +117,9 @@ def import_cmd(bag: Path, *, events: Path, event_table: Path | None, mapping: Pa
     (from ros2 bag record, or swarmtag simulate --mcap). Times are relative to each
     trial's start: seconds, or ticks for simulated runs. A BAG such as run.mcap that
     does not exist reads every run-*.mcap beside it into one log: the files simulate
-    --mcap run.mcap writes, one per condition.
+    --mcap run.mcap writes, one per condition. Only the mapped topics are read; topics of
+    service events or foreign encodings are reported as skipped. MCAP checksums and each
+    topic's message count are verified: a damaged bag or one read short is refused.
     """
     plan = OutputPlan()
     bags = bag_files(bag)
@@ -139,6 +144,11 @@ def import_cmd(bag: Path, *, events: Path, event_table: Path | None, mapping: Pa
         )
     for found, log in zip(bags, read, strict=True):
         click.echo(_summary(found, log))
+        if log.skipped:
+            click.echo(
+                f"{found}: skipped {len(log.skipped)} topic(s) that hold no plain messages "
+                f"(not read): {', '.join(log.skipped)}"
+            )
     click.echo(f"wrote event log: {events}")
     if event_table is not None and logs.events is not None:
         click.echo(f"wrote event table ({len(logs.events)} rows): {event_table}")

@@ -74,7 +74,8 @@ def _write_html(
     """One-section HTML report of an event log: tables and embedded figures."""
     from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
 
-    with tempfile.TemporaryDirectory() as folder:
+    # The figures are made beside the staged page, on its device, and go with its staging.
+    with tempfile.TemporaryDirectory(dir=path.parent, prefix=".figures-") as folder:
         section = Section(
             title=f"Event log {events.name}",
             facts={

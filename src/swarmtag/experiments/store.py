@@ -36,6 +36,7 @@ from typing import Any, Final, Self
 
 import numpy as np
 
+from swarmtag._atomic import write_failure_in_text
 from swarmtag.errors import StoreError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 
@@ -150,15 +151,32 @@ class ResultsStore:
             # A DuckDBPyConnection; typed Any as duckdb's stubs vary between releases.
             self._con: Any = duckdb.connect(str(self.path), read_only=read_only)
         except duckdb.Error as error:
-            msg = f"{self.path}: cannot open the results store ({error})"
-            raise StoreError(msg) from None
+            raise self._failed("cannot open the results store", error, kept=False) from None
         try:
             if not read_only:
                 self._con.execute(SCHEMA_SQL)
             self._carrier_rows = _CARRIER_ROWS.format(**self._optional_carrier_columns())
+        except duckdb.Error as error:  # a full disk as the tables are made
+            self._con.close()
+            raise self._failed("cannot prepare the results store", error, kept=False) from None
         except BaseException:  # Ctrl-C included: no open handle (nor .wal) left behind
             self._con.close()
             raise
+
+    def _failed(self, what: str, error: Exception, *, kept: bool = True) -> StoreError:
+        """One line for a DuckDB error: the device's refusal by its name, else DuckDB's words.
+
+        A device that refused a write (full, over quota, read-only) is said
+        as everywhere else; what was committed before stays, so the same
+        command resumes once there is room.
+        """
+        text = " ".join(str(error).split())
+        failure = write_failure_in_text(text, self.path)
+        if failure is not None and kept:
+            return StoreError(f"{failure}; the runs stored before are kept (run again to resume)")
+        if failure is not None:
+            return StoreError(str(failure))
+        return StoreError(f"{self.path}: {what} ({text})")
 
     def _optional_carrier_columns(self) -> dict[str, str]:
         """SQL for each optional carrier column: its name, or a typed NULL in an older store."""
@@ -268,6 +286,12 @@ class ResultsStore:
                 f"write_chunk: runs {run_ids.tolist()} of {condition} are already stored ({error})"
             )
             raise StoreError(msg) from None
+        except duckdb.Error as error:  # a full disk at COMMIT: none of the chunk is stored
+            with contextlib.suppress(duckdb.Error):
+                con.execute("ROLLBACK")
+            raise self._failed(
+                f"cannot store runs {run_ids.tolist()} of {condition}", error
+            ) from None
         except BaseException:
             # A Ctrl-C raised as COMMIT returns finds no transaction left to roll back.
             with contextlib.suppress(duckdb.TransactionException):

@@ -1,15 +1,21 @@
 """Reading a trial's event log out of a ROS 2 bag (rosbag2 sqlite3 or MCAP; the ``bags`` extra).
 
-``read_bag`` opens a rosbag2 folder, a bare ``.db3`` file or an ``.mcap`` file with
-``rosbags`` (no ROS installation needed), checks that the bag has every topic and field the
-mapping (``swarmtag.io.bag_mapping``) names, reads the trial marks, tag changes and robot
-events, and turns them into the event logs of SPEC §8.1 (``swarmtag.io.bag_trials``).
-Message types come from the bag's own definitions; bags without them (ROS 2 Humble's
-sqlite3 bags) are read with the Humble types plus ``swarmtag_msgs``.
+``read_bag`` opens a rosbag2 folder, a bare ``.db3`` file or an ``.mcap`` file (no ROS
+installation needed): MCAP files by channel with Foxglove's ``mcap`` reader after checking
+their CRCs (``swarmtag.io.mcap_in``), sqlite3 bags with ``rosbags``
+(``swarmtag.io.bag_source``). It checks that the bag has every topic and field the mapping
+(``swarmtag.io.bag_mapping``) names, reads the trial marks, tag changes and robot events of
+those topics only, and turns them into the event logs of SPEC §8.1
+(``swarmtag.io.bag_trials``). Message types come from the bag's own definitions; bags
+without them (ROS 2 Humble's sqlite3 bags) are read with the Humble types plus
+``swarmtag_msgs``.
 
-Every refusal is one ``BagError`` line: a path that is no bag, a corrupt bag, the topics
-and fields it lacks (all of them, in one line), a value out of range (naming the topic,
-the message and the field), or a log that breaks the event-log checks.
+Every refusal is one ``BagError`` line: a path that is no bag, a corrupt or damaged bag
+(with the library's whole message, or the byte offset of a chunk failing its CRC), a topic
+read short of the count the bag states, the topics and fields it lacks (all of them, in
+one line), a value out of range (naming the topic, the message and the field), or a log
+that breaks the event-log checks. Topics of service events or of foreign encodings are
+never read and come back as ``BagLogs.skipped``.
 """
 
 from __future__ import annotations
@@ -17,11 +23,11 @@ from __future__ import annotations
 import functools
 import math
 import os
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Collection, Iterator, Sequence
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 import numpy as np
 
@@ -30,6 +36,7 @@ from swarmtag._interrupt import checkpoint
 from swarmtag._resources import check_memory
 from swarmtag.errors import BagError, SwarmtagError
 from swarmtag.io.bag_mapping import BagMapping, FieldKind, Source
+from swarmtag.io.bag_source import BagSource, RosbagsSource
 from swarmtag.io.bag_trials import (
     RobotEvents,
     TagChanges,
@@ -38,14 +45,11 @@ from swarmtag.io.bag_trials import (
     event_table,
     trials,
 )
+from swarmtag.io.mcap_check import one_line
 from swarmtag.io.ros_types import require_rosbags, typestore
 from swarmtag.io.schema import INT64_MAX, MISSING_ID
 from swarmtag.io.tables import CarrierLog, EventTable
 from swarmtag.tag import TagStatus
-
-if TYPE_CHECKING:
-    from rosbags.highlevel import AnyReader
-    from rosbags.interfaces import Connection
 
 __all__ = ["BAG_SUFFIXES", "BYTES_PER_ENTRY", "BagLogs", "bag_path", "read_bag"]
 
@@ -65,11 +69,15 @@ _NAME, _BASE, _ARRAY, _SEQUENCE = 2, 1, 3, 4  # rosbags' Nodetype values
 
 @dataclass(frozen=True, eq=False)
 class BagLogs:
-    """What a bag gave: the per-carrier log, the event table if asked for, the trial count."""
+    """What a bag gave: the carrier log, the event table if asked for, trials, skipped topics.
+
+    ``skipped``: topics not read because they hold no plain messages, ``topic (type: why)``.
+    """
 
     carriers: CarrierLog
     events: EventTable | None
     trials: int
+    skipped: tuple[str, ...] = ()
 
 
 def bag_path(path: str | os.PathLike[str]) -> Path:
@@ -309,22 +317,14 @@ def _entries(topic: _Topic, message: object) -> list[object]:
     return [message] if topic.entries is None else list(_get(message, topic.entries))
 
 
-def _messages(reader: AnyReader, topic: str) -> Iterator[tuple[int, int, object]]:
-    """(index, log time, message) of every message on ``topic``, in the bag's order."""
-    connections: list[Connection] = [c for c in reader.connections if c.topic == topic]
-    for index, (connection, at, raw) in enumerate(reader.messages(connections=connections)):
-        checkpoint()  # a Ctrl-C that the storage library swallowed ends the reading here
-        yield index, at, reader.deserialize(raw, connection.msgtype)
-
-
-def _read_marks(reader: AnyReader, mapping: BagMapping, reading: _Reading) -> list[TrialMark]:
+def _read_marks(reader: BagSource, mapping: BagMapping, reading: _Reading) -> list[TrialMark]:
     topic = mapping.trial.topic
     if topic is None:
         return [
             _mark(reading, mapping, None, reading.start, f"the bag's one trial ({mapping.source})")
         ]
     marks = []
-    for index, at, message in _messages(reader, topic):
+    for index, at, message in reader.messages(topic):
         reading.count(1)
         stamp = reading.stamp(mapping.trial.stamp, message, at)
         marks.append(_mark(reading, mapping, message, stamp, reading.where(topic, index, stamp)))
@@ -332,7 +332,7 @@ def _read_marks(reader: AnyReader, mapping: BagMapping, reading: _Reading) -> li
 
 
 def _read_changes(
-    reader: AnyReader, mapping: BagMapping, topic: _Topic, reading: _Reading
+    reader: BagSource, mapping: BagMapping, topic: _Topic, reading: _Reading
 ) -> TagChanges:
     tags = mapping.tag_status
     codes = {
@@ -341,7 +341,7 @@ def _read_changes(
         tags.picked_up: TagStatus.PICKED_UP,
     }
     columns: list[list[int]] = [[], [], [], [], []]
-    for index, at, message in _messages(reader, topic.topic):
+    for index, at, message in reader.messages(topic.topic):
         stamp = reading.stamp(topic.stamp, message, at)
         where = reading.where(topic.topic, index, stamp)
         entries = _entries(topic, message)
@@ -366,7 +366,7 @@ def _read_changes(
 
 
 def _read_events(
-    reader: AnyReader, mapping: BagMapping, topic: _Topic, reading: _Reading
+    reader: BagSource, mapping: BagMapping, topic: _Topic, reading: _Reading
 ) -> RobotEvents:
     events = mapping.robot_events
     assert events is not None
@@ -374,7 +374,7 @@ def _read_events(
     kinds: list[str] = []
     ids: list[list[int]] = [[], []]
     values: list[float] = []
-    for index, at, message in _messages(reader, topic.topic):
+    for index, at, message in reader.messages(topic.topic):
         stamp = reading.stamp(topic.stamp, message, at)
         where = reading.where(topic.topic, index, stamp)
         entries = _entries(topic, message)
@@ -401,7 +401,10 @@ def _read_events(
 
 @contextmanager
 def _bag_errors(name: str) -> Iterator[None]:
-    """Whatever ``rosbags`` raises on a corrupt or foreign file, as one ``BagError`` line."""
+    """Whatever the storage libraries raise on a corrupt file, as one ``BagError`` line.
+
+    The library's whole message is kept, its lines joined into one.
+    """
     try:
         yield
     except SwarmtagError:
@@ -409,11 +412,26 @@ def _bag_errors(name: str) -> Iterator[None]:
     except MemoryError:
         msg = f"{name}: too large to read (out of memory)"
         raise BagError(msg) from None
-    except Exception as error:  # noqa: BLE001 - rosbags raises many kinds on corrupt bags
-        lines = str(error).strip().splitlines()
-        detail = lines[0][:200] if lines else type(error).__name__
-        msg = f"{name}: not a readable ROS 2 bag ({detail})"
+    except Exception as error:  # noqa: BLE001 - the storage libraries raise many kinds
+        msg = f"{name}: not a readable ROS 2 bag ({one_line(error)})"
         raise BagError(msg) from None
+
+
+def _open(bag: Path, name: str, needed: Collection[str], stack: ExitStack) -> BagSource:
+    """The bag's reader: MCAP files by channel, anything else through ``rosbags``."""
+    from rosbags.highlevel import AnyReader  # noqa: PLC0415 - the bags extra
+
+    from swarmtag.io.bag_metadata import read_metadata  # noqa: PLC0415
+    from swarmtag.io.mcap_in import McapSource  # noqa: PLC0415
+
+    if bag.is_dir():
+        metadata = read_metadata(bag, name)
+        if metadata.storage == "mcap" and not metadata.compression:
+            return McapSource(name, metadata.files, needed, stack, metadata.counts)
+    elif bag.suffix.lower() == ".mcap":
+        return McapSource(name, [bag], needed, stack)
+    reader = stack.enter_context(AnyReader([bag], default_typestore=typestore()))
+    return RosbagsSource(name, reader, folder=bag.is_dir())
 
 
 def read_bag(
@@ -430,13 +448,12 @@ def read_bag(
     bag = bag_path(path)
     name = os.fspath(path)
     require_rosbags()
-    from rosbags.highlevel import AnyReader  # noqa: PLC0415 - the bags extra
-
     topics = _topics(mapping, with_events=with_events)
-    with _bag_errors(name), AnyReader([bag], default_typestore=typestore()) as reader:
-        found = {t: info.msgtype for t, info in reader.topics.items() if info.msgtype}
-        fielddefs = reader.typestore.fielddefs
-        problems = [p for t in topics.values() for p in _problems(t, found, fielddefs)]
+    needed = {t.topic for t in topics.values()}
+    with _bag_errors(name), ExitStack() as stack:
+        reader = _open(bag, name, needed, stack)
+        found = reader.topics
+        problems = [p for t in topics.values() for p in _problems(t, found, reader.fielddefs)]
         if problems:
             listed = ", ".join(f"{t} ({m})" for t, m in sorted(found.items())) or "none"
             msg = (
@@ -444,10 +461,9 @@ def read_bag(
                 f"The bag's topics: {listed}"
             )
             raise BagError(msg)
-        start = reader.start_time if reader.message_count else 0
-        reading = _Reading(name, start)
+        reading = _Reading(name, reader.start)
         found_trials = trials(_read_marks(reader, mapping, reading), source=name)
-        start = min(start, found_trials[0].start)  # trials are named by their time from here
+        start = min(reader.start, found_trials[0].start)  # trials are named by their time from here
         changes = _read_changes(reader, mapping, topics["tag_status"], reading)
         events = (
             _read_events(reader, mapping, topics["robot_events"], reading) if with_events else None
@@ -459,4 +475,4 @@ def read_bag(
     table = None
     if events is not None:
         table = event_table(found_trials, events, source=name, bag_start=start)
-    return BagLogs(carriers=log, events=table, trials=len(found_trials))
+    return BagLogs(carriers=log, events=table, trials=len(found_trials), skipped=reader.skipped)

@@ -16,15 +16,17 @@ topic                      type                                 what
 ``/swarmtag/arena``        ``visualization_msgs/msg/MarkerArray`` floor and zones (once)
 =========================  ===================================  ==============================
 
-The file is written with ``rosbags``' rosbag2 MCAP writer (zstd chunks) into a folder beside
-the target, and its ``.mcap`` file is moved into place when complete; an error leaves no file.
+Messages are serialized with the ``rosbags`` type store and written with Foxglove's ``mcap``
+writer (profile ``ros2``, zstd chunks, summary and statistics) with every CRC the MCAP spec
+defines: each chunk's, the data section's and the summary's, so ``swarmtag log import`` and any
+MCAP reader can tell a damaged file from a good one. The file is written beside the target
+under a hidden name and moved into place when complete; an error leaves no file.
 """
 
 from __future__ import annotations
 
 import math
 import os
-import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,8 +40,9 @@ from swarmtag.errors import BagError
 from swarmtag.io.ros_types import ROBOT_EVENT_ARRAY, TAG_STATUS_ARRAY, TRIAL, typestore
 
 if TYPE_CHECKING:
-    from rosbags.interfaces import Connection
-    from rosbags.rosbag2 import Writer
+    from typing import BinaryIO
+
+    from mcap.writer import Writer
 
 __all__ = ["CHANNELS", "FRAME", "Arena", "McapRecorder", "TrialInfo"]
 
@@ -55,8 +58,8 @@ CHANNELS: Final = {
     "/swarmtag/arena": "visualization_msgs/msg/MarkerArray",
 }
 """Every channel of the file: topic and ROS 2 message type."""
-_BAG_NAME: Final = "recording"
-"""The rosbag2 folder's name, which the file's metadata records: the same for every target."""
+_LIBRARY: Final = "swarmtag"
+"""The writer named in the file's header: the same for every version, so that a run's bytes are."""
 _START, _END = 0, 1  # swarmtag_msgs/msg/Trial START, END
 _AWAITING, _PICKED_UP = 1, 2
 _ROBOT_HEIGHT, _CARRIER_HEIGHT, _LIFTED = 0.12, 0.06, 0.16
@@ -117,10 +120,10 @@ class McapRecorder:
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = Path(path)
-        self._folder = self.path.with_name(f".{self.path.name}.rosbag2")
-        self._bag = self._folder / _BAG_NAME
+        self._partial = self.path.with_name(f".{self.path.name}.partial")
+        self._handle: BinaryIO | None = None
         self._writer: Writer | None = None
-        self._connections: dict[str, Connection] = {}
+        self._channels: dict[str, int] = {}
         self._store: Any = None
         self._empty: dict[str, Any] = {}
 
@@ -128,26 +131,25 @@ class McapRecorder:
 
     def __enter__(self) -> Self:
         self._store = typestore()
-        from rosbags.rosbag2 import (  # noqa: PLC0415 - the bags extra
-            CompressionFormat,
-            CompressionMode,
-            StoragePlugin,
-            Writer,
-        )
+        from mcap.writer import CompressionType, Writer  # noqa: PLC0415 - the bags extra
 
-        shutil.rmtree(self._folder, ignore_errors=True)
-        writer = Writer(self._bag, version=9, storage_plugin=StoragePlugin.MCAP)
-        writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         try:
-            writer.open()
-            for topic, msgtype in CHANNELS.items():
-                self._connections[topic] = writer.add_connection(
-                    topic, msgtype, typestore=self._store
-                )
+            self._handle = self._partial.open("wb")
         except OSError as error:
-            shutil.rmtree(self._folder, ignore_errors=True)
             msg = f"{self.path}: cannot write ({error.strerror or error})"
             raise BagError(msg) from None
+        writer = Writer(
+            self._handle, compression=CompressionType.ZSTD, enable_crcs=True, enable_data_crcs=True
+        )
+        writer.start(profile="ros2", library=_LIBRARY)
+        for topic, msgtype in CHANNELS.items():
+            definition, _ = self._store.generate_msgdef(msgtype, ros_version=2)
+            schema = writer.register_schema(
+                name=msgtype, encoding="ros2msg", data=definition.encode("utf-8")
+            )
+            self._channels[topic] = writer.register_channel(
+                topic=topic, message_encoding="cdr", schema_id=schema
+            )
         self._writer = writer
         self._cache()
         return self
@@ -159,20 +161,23 @@ class McapRecorder:
         trace: TracebackType | None,
     ) -> None:
         writer, self._writer = self._writer, None
+        handle, self._handle = self._handle, None
         try:
-            if writer is not None and kind is None:
-                writer.close()
-                (self._bag / f"{_BAG_NAME}.mcap").replace(self.path)
-            elif writer is not None:
-                writer.abort()
+            if writer is not None and handle is not None and kind is None:
+                writer.finish()  # type: ignore[no-untyped-call]  # mcap leaves it unannotated
+                handle.close()
+                self._partial.replace(self.path)
         finally:
-            shutil.rmtree(self._folder, ignore_errors=True)
+            if handle is not None:
+                handle.close()
+            self._partial.unlink(missing_ok=True)
 
     def _write(self, topic: str, at: int, message: object) -> None:
         assert self._writer is not None, "write inside the with block"
-        msgtype = CHANNELS[topic]
-        data = self._store.serialize_cdr(message, msgtype)
-        self._writer.write(self._connections[topic], at, data)
+        data = self._store.serialize_cdr(message, CHANNELS[topic])
+        self._writer.add_message(
+            self._channels[topic], log_time=at, data=bytes(data), publish_time=at
+        )
 
     def _type(self, name: str) -> Any:  # noqa: ANN401 - rosbags' generated message classes
         return self._store.types[name]

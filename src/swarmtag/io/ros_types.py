@@ -53,11 +53,13 @@ def message_definitions() -> dict[str, str]:
 
 
 def require_rosbags() -> None:
-    """Import ``rosbags`` now, or raise ``BagError`` naming the extra to install."""
+    """Import the ``bags`` extra now (``rosbags``, ``mcap``), or raise ``BagError`` naming it."""
     try:
         importlib.import_module("rosbags.typesys")
         importlib.import_module("rosbags.rosbag2")
         importlib.import_module("rosbags.highlevel")
+        importlib.import_module("mcap.reader")
+        importlib.import_module("mcap.writer")
     except ImportError:
         raise BagError(NEEDS_EXTRA) from None
 

@@ -39,6 +39,7 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag import _interrupt
 from swarmtag.errors import PerceptionError
 from swarmtag.perception._bits import read_candidate
 from swarmtag.perception._opencv import opencv
@@ -76,6 +77,12 @@ SECOND_READ_RMS: Final = 1.0
 its corners must fit a square; a candidate with a stray corner can still decode."""
 UNDERSIDE_COSINE: Final = math.cos(math.radians(45.0))
 """A marker whose normal points down by more than 45 degrees is an underside marker."""
+SQPNP_MIN_SPREAD: Final = 2e-5
+"""Least spread (variance, both axes summed) of a marker's corners in normalized image
+coordinates for which ``SOLVEPNP_SQPNP`` is asked: OpenCV's solver asserts at 1e-5
+(``POINT_VARIANCE_THRESHOLD``), which a marker under 0.45 % of the focal length across
+falls below (a 20 px marker under a 4,500 px focal length: a narrow lens). Twice that, so
+that rounding never reaches OpenCV's assertion; IPPE alone poses such a marker."""
 
 
 class Face(IntEnum):
@@ -341,6 +348,21 @@ def _misfit(normal: Float, *, upward: bool) -> float:
     return down if upward else min(abs(float(normal[2])), down)
 
 
+def _spread(corners: Float, camera: Camera) -> float:
+    """Variance of the corners in normalized image coordinates, as OpenCV's SQPnP computes it."""
+    lens = camera.intrinsics
+    points = (
+        opencv()
+        .undistortPoints(
+            np.ascontiguousarray(corners, dtype=np.float64).reshape(-1, 1, 2),
+            lens.matrix,
+            lens.coefficients,
+        )
+        .reshape(-1, 2)
+    )
+    return float(np.mean(np.sum(points**2, axis=1)) - np.sum(points.mean(axis=0) ** 2))
+
+
 def _pose(
     corners: Float, camera: Camera, size: float
 ) -> tuple[Float, Float, float, tuple[Float, ...]] | None:
@@ -351,14 +373,18 @@ def _pose(
 
     IPPE_SQUARE gives the two poses a square admits; SQPNP is asked too, because
     OpenCV's IPPE returns a zero rotation for an exactly symmetric view (its
-    rotation-to-vector step divides by sin(pi) there). Poses facing up are impossible
+    rotation-to-vector step divides by sin(pi) there), unless the marker is too small
+    a part of the view for it (``SQPNP_MIN_SPREAD``). Poses facing up are impossible
     (no marker faces up) and are dropped: they come from markers seen nearly edge-on,
     such as an underside seen by a perimeter camera from far below its plane.
     """
     cv2 = opencv()
     lens = camera.intrinsics
     options = []
-    for method in (cv2.SOLVEPNP_IPPE_SQUARE, cv2.SOLVEPNP_SQPNP):
+    methods = [cv2.SOLVEPNP_IPPE_SQUARE]
+    if _spread(corners, camera) >= SQPNP_MIN_SPREAD:
+        methods.append(cv2.SOLVEPNP_SQPNP)
+    for method in methods:
         count, rotations, translations, errors = cv2.solvePnPGeneric(
             _square(size), corners, lens.matrix, lens.coefficients, flags=method
         )
@@ -438,14 +464,16 @@ def detect_markers(
     with no possible pose (see ``_pose``), and one found only by the second read whose
     corners do not fit a square (``SECOND_READ_RMS``). Raises ``PerceptionError`` for an
     image that is not this camera's, ``ConfigError`` when OpenCV (the ``vision`` extra)
-    is missing.
+    is missing. The search runs in a helper thread (``_interrupt.in_thread``), so that
+    Ctrl-C ends it at once even on a large image.
     """
     opencv()  # refuses in one line when the extra is missing (the detector may be cached)
     gray = to_gray(image, camera)
     mount = camera.mount
     grid = carrier.underside_map
     found = []
-    for marker, image_points, second in _found(gray):
+    for marker, image_points, second in _interrupt.in_thread(lambda: _found(gray)):
+        _interrupt.checkpoint()
         if not _inside(image_points, gray):
             continue
         pose = _pose(image_points, camera, carrier.size_of(marker))

@@ -44,8 +44,8 @@ from swarmtag.policy._kernel import (
     PROXIMITY_KIND,
     URGENCY_KIND,
     WEIGHTED_KIND,
-    kernel_score,
 )
+from swarmtag.policy._kernel import checked_kernel_score as kernel_score
 from swarmtag.policy._names import parse_policy
 from swarmtag.policy._policies import Edf, Policy, Proximity, Urgency, Weighted
 from swarmtag.policy._rules import (

@@ -26,6 +26,7 @@ from unittest import mock
 import numpy as np
 import numpy.typing as npt
 
+from swarmtag._checks import check_instance
 from swarmtag.errors import PolicyError
 from swarmtag.policy._rules import ScoreRule, load_rule
 
@@ -82,6 +83,7 @@ def _call(rule: ScoreRule, sample: dict[str, npt.NDArray[Any]]) -> npt.NDArray[n
 
 def check_rule(rule: ScoreRule) -> list[RuleCheck]:
     """Run every check on ``rule``; later checks are skipped (failed) once it cannot run."""
+    check_instance("rule", rule, ScoreRule, error=PolicyError)
     sample = _sample()
     context = {key: sample[key] for key in ("marker", "age")}
     try:

@@ -11,6 +11,7 @@ from numbers import Integral, Real
 
 import numpy as np
 
+from swarmtag._checks import check_instance, check_sequence
 from swarmtag.errors import PolicyError
 from swarmtag.policy._policies import Policy
 from swarmtag.policy._select import select
@@ -56,6 +57,8 @@ def choose(policy: Policy, candidates: Sequence[Candidate]) -> Candidate | None:
     >>> choose(Urgency(alpha=0.7), []) is None
     True
     """
+    for candidate in check_sequence("candidates", candidates, error=PolicyError):
+        check_instance("candidates", candidate, Candidate, error=PolicyError)
     try:
         marker = np.array([c.marker for c in candidates], dtype=np.int64)
     except OverflowError as exc:

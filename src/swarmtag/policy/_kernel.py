@@ -10,11 +10,21 @@ against each other.
 
 from __future__ import annotations
 
+from numbers import Real
 from typing import Final
 
-from swarmtag.policy._terms import PROXIMITY_RANGE, URGENCY_SCALE
+from swarmtag._checks import check_int, check_number, show
+from swarmtag.errors import PolicyError
+from swarmtag.policy._terms import MAX_URGENCY, PROXIMITY_RANGE, URGENCY_SCALE
 
-__all__ = ["EDF_KIND", "PROXIMITY_KIND", "URGENCY_KIND", "WEIGHTED_KIND", "kernel_score"]
+__all__ = [
+    "EDF_KIND",
+    "PROXIMITY_KIND",
+    "URGENCY_KIND",
+    "WEIGHTED_KIND",
+    "checked_kernel_score",
+    "kernel_score",
+]
 
 PROXIMITY_KIND: Final = 0
 """``kernel_form`` kind of ``Proximity`` (parameter unused)."""
@@ -42,3 +52,23 @@ def kernel_score(kind: int, parameter: float, urgency: float, distance: float) -
     if kind == WEIGHTED_KIND:
         return parameter * urgency + (1.0 - parameter) * term
     return term
+
+
+def checked_kernel_score(kind: int, parameter: float, urgency: float, distance: float) -> float:
+    """``kernel_score`` with its arguments checked: what ``swarmtag.policy`` exports.
+
+    The compiled kernels take the plain ``kernel_score`` (checks would not
+    compile, and the simulator checks a policy once when it is built).
+
+    >>> checked_kernel_score(7, 0.5, 4.0, 1.8)
+    Traceback (most recent call last):
+    ...
+    swarmtag.errors.PolicyError: kind: 7 is not an integer in 0-3
+    """
+    kind = check_int("kind", kind, low=PROXIMITY_KIND, high=EDF_KIND, error=PolicyError)
+    parameter = check_number("parameter", parameter, error=PolicyError)
+    urgency = check_number("urgency", urgency, low=0.0, high=MAX_URGENCY, error=PolicyError)
+    given: object = distance  # checked as what it is, not as annotated
+    if isinstance(given, bool) or not isinstance(given, Real) or not float(given) >= 0:
+        raise PolicyError(f"distance: {show(given)} is not a number >= 0 (inf allowed)")
+    return kernel_score(kind, parameter, urgency, float(given))

@@ -17,6 +17,7 @@ from typing import Any, overload
 import numpy as np
 import numpy.typing as npt
 
+from swarmtag._checks import show
 from swarmtag.errors import PolicyError
 from swarmtag.policy._kernel import EDF_KIND, PROXIMITY_KIND, URGENCY_KIND, WEIGHTED_KIND
 from swarmtag.policy._terms import as_float_array, formula, wrap_result
@@ -26,11 +27,15 @@ __all__ = ["Edf", "Policy", "Proximity", "Urgency", "Weighted"]
 
 def _real(name: str, value: object, allowed: str) -> float:
     """Return ``value`` as a float, or raise ``PolicyError`` naming ``name`` and ``allowed``."""
-    if isinstance(value, bool) or not isinstance(value, Real):
-        msg = f"{name}: {value!r} must be {allowed}"
+    try:
+        number = None if isinstance(value, bool) or not isinstance(value, Real) else float(value)
+    except OverflowError:  # an integer beyond float range
+        number = None
+    if number is None:
+        msg = f"{name}: {show(value)} must be {allowed}"
         raise PolicyError(msg)
     # ``+ 0.0`` turns -0.0 into 0.0 so that equal policies have equal names.
-    return float(value) + 0.0
+    return number + 0.0
 
 
 @dataclass(frozen=True, slots=True)

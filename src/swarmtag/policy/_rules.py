@@ -34,6 +34,7 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
+from swarmtag._checks import check_instance, check_path, check_text
 from swarmtag.errors import PolicyError
 from swarmtag.policy._policies import Policy
 
@@ -197,6 +198,9 @@ def register_rule(rule: ScoreRule, *, origin: str | None = None) -> ScoreRule:
     origin registers again (an edited file replaces its rule), another
     origin under a name already registered is refused.
     """
+    check_instance("rule", rule, ScoreRule, error=PolicyError)
+    if origin is not None:
+        check_text("origin", origin, error=PolicyError)
     origin = rule.source if origin is None else origin
     held = _REGISTERED.get(rule.label)
     if held is not None and held[0] != origin:
@@ -209,6 +213,7 @@ def register_rule(rule: ScoreRule, *, origin: str | None = None) -> ScoreRule:
 
 def registered_rule(name: str) -> ScoreRule | None:
     """The rule registered (or offered by an entry point) under condition ``name``, or None."""
+    check_text("name", name, error=PolicyError)
     held = _REGISTERED.get(name)
     if held is not None:
         return held[1]
@@ -237,6 +242,9 @@ def load_rule(spec: str, *, base: Path | None = None) -> ScoreRule:
     raises, no such function, a signature a rule cannot have) is one
     ``PolicyError`` line naming the file.
     """
+    check_text("rule file", spec, error=PolicyError)
+    if base is not None:
+        base = Path(check_path("base", base, error=PolicyError))
     path_text, sep, function_name = spec.rpartition(":")
     if not sep or not path_text or not function_name:
         msg = f"rule file: {spec!r} is not FILE.py:FUNCTION"

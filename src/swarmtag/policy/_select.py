@@ -14,6 +14,7 @@ from collections.abc import Mapping
 import numpy as np
 import numpy.typing as npt
 
+from swarmtag._checks import show
 from swarmtag.errors import PolicyError
 from swarmtag.policy._policies import Policy
 from swarmtag.policy._terms import MAX_URGENCY, as_float_array
@@ -137,6 +138,21 @@ def best_of(
     ``(..., carriers)`` shape with at least one carrier; nothing is checked,
     and no input is changed.
     """
+    for name, value in (("scores", scores), ("distance", distance), ("marker", marker)):
+        if not isinstance(value, np.ndarray) or value.dtype.kind not in "iuf":
+            raise PolicyError(f"{name}: {show(value)} is not a numpy array of numbers")
+    if available is not None and (
+        not isinstance(available, np.ndarray) or available.dtype.kind != "b"
+    ):
+        raise PolicyError(f"available: {show(available)} is not a numpy array of booleans")
+    try:
+        shape = np.broadcast_shapes(
+            scores.shape, distance.shape, marker.shape, () if available is None else available.shape
+        )
+    except ValueError:
+        raise PolicyError("scores, distance, marker and available do not broadcast") from None
+    if not shape or shape[-1] == 0:
+        raise PolicyError(f"best_of needs at least one carrier along the last axis (shape {shape})")
     return _best(scores, distance, marker, available, fresh=False)
 
 

@@ -63,8 +63,8 @@ def proximity_term(distance: npt.ArrayLike) -> np.float64 | npt.NDArray[np.float
     9 at the carrier, falling linearly to 0 at 3.6 m and staying 0 beyond.
     A scalar (Python or numpy) gives a ``numpy.float64`` (a ``float``
     subclass); an array (or list) gives a float64 array of the same shape.
-    Scalar and array forms give bit-identical values. No value checks are
-    made here; ``select`` validates its inputs.
+    Scalar and array forms give bit-identical values. A negative or NaN
+    distance is refused (``PolicyError``); ``inf`` gives 0.
 
     >>> float(proximity_term(1.8))
     4.5
@@ -72,6 +72,9 @@ def proximity_term(distance: npt.ArrayLike) -> np.float64 | npt.NDArray[np.float
     array([9.  , 6.75, 0.  , 0.  ])
     """
     d = as_float_array("distance", distance)
+    if not (d >= 0).all():
+        msg = "distance: a value is negative or NaN (distances are metres, >= 0)"
+        raise PolicyError(msg)
     return wrap_result(formula(d), distance)
 
 

@@ -26,6 +26,8 @@ import numpy as np
 import py_trees
 from py_trees.composites import Selector, Sequence
 
+from swarmtag._checks import check_instance, check_path, check_text, show
+from swarmtag.errors import ConfigError
 from swarmtag.robot.behaviours import (
     Centre,
     Dock,
@@ -108,6 +110,9 @@ def create_tree(
     config: ControllerConfig, namespace: str = "/robot"
 ) -> py_trees.trees.BehaviourTree:
     """One robot's tree, its memory under ``namespace`` (connect it with ``setup(io=...)``)."""
+    check_instance("config", config, ControllerConfig)
+    if not check_text("namespace", namespace):
+        raise ConfigError("namespace: the empty string names no blackboard namespace")
     fetch = Sequence(
         "Fetch a carrier",
         memory=True,
@@ -146,6 +151,7 @@ def initialise_memory(
 
 def ascii_picture(tree: py_trees.trees.BehaviourTree) -> str:
     """The tree as text (py_trees' ASCII rendering)."""
+    check_instance("tree", tree, py_trees.trees.BehaviourTree)
     return py_trees.display.ascii_tree(tree.root)
 
 
@@ -156,6 +162,10 @@ def dot_picture(
 
     Returns the files written (``folder / name`` with .dot, .png, .svg).
     """
+    check_instance("tree", tree, py_trees.trees.BehaviourTree)
+    folder = Path(check_path("folder", folder))
+    if not check_text("name", name) or "/" in name or "\0" in name or name in (".", ".."):
+        raise ConfigError(f"name: {show(name)} is not a plain file name")
     graph = py_trees.display.dot_tree(tree.root)
     written = [folder / f"{name}.dot"]
     graph.write(str(written[0]), format="raw")

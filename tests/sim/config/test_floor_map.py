@@ -4,15 +4,18 @@ from __future__ import annotations
 
 import heapq
 import math
+import time
 from importlib import resources
 
 import numpy as np
 import pytest
 
 from swarmtag.errors import ConfigError
+from swarmtag.sim.config import floor_map, routes
 from swarmtag.sim.config.floor_map import (
     DROPOFF,
     FLOOR,
+    MAX_MAP_BYTES,
     PICKUP,
     SHELF,
     SHIPPED_MAPS,
@@ -20,6 +23,7 @@ from swarmtag.sim.config.floor_map import (
     load_floor_map,
     parse_floor_map,
 )
+from swarmtag.sim.config.warehouse import Warehouse, floor_of
 
 TINY = """\
 ; a tiny hall
@@ -321,3 +325,60 @@ def test_unreadable_sources_are_refused_naming_them(tmp_path):
     binary.write_bytes(b"\xff\xfe\x00")
     with pytest.raises(ConfigError, match=r"binary\.txt: the floor map file is not UTF-8 text"):
         load_floor_map(str(binary), cell=1.0)
+
+
+# -- map files: size checked before reading, read once, routes searched where Ctrl-C works -----
+
+
+@pytest.mark.parametrize("size", [MAX_MAP_BYTES + 1, 3 * 2**30], ids=["just-over", "3GiB"])
+def test_a_map_file_over_the_size_limit_is_refused_without_being_read(tmp_path, size):
+    path = tmp_path / "huge.txt"
+    with path.open("wb") as stream:
+        stream.truncate(size)  # sparse: nothing to read but zeros, and no disk used
+    begin = time.monotonic()
+    with pytest.raises(ConfigError) as refused:
+        load_floor_map(str(path), cell=1.0)
+    assert time.monotonic() - begin < 0.5
+    assert str(refused.value).startswith(f"{path}: the floor map file is ")
+    assert str(refused.value).endswith(
+        "; at most 32.0 MiB is read (4096 lines of 4096 cells, with room for comments)"
+    )
+
+
+def test_a_map_file_is_parsed_once_while_it_stays_the_same(tmp_path, monkeypatch):
+    path = tmp_path / "mine.txt"
+    path.write_text(TINY, encoding="utf-8")
+    parses = []
+    real = floor_map.parse_floor_map
+    monkeypatch.setattr(
+        floor_map, "parse_floor_map", lambda *a, **k: parses.append(1) or real(*a, **k)
+    )
+    first = floor_of(Warehouse(map=str(path), cell=1.0))
+    assert floor_of(Warehouse(map=str(path), cell=1.0)) is first
+    assert load_floor_map(str(path), cell=1.0) is first
+    assert len(parses) == 1
+    assert load_floor_map(str(path), cell=2.0) is not first  # another cell: another floor
+    path.write_text(TINY.replace("P....", "....."), encoding="utf-8")  # changed: read again
+    changed = load_floor_map(str(path), cell=1.0)
+    assert changed.pickup_slots.shape[0] == first.pickup_slots.shape[0] - 1
+    assert len(parses) == 3
+
+
+def test_a_large_floor_is_searched_in_a_worker_with_the_same_routes(monkeypatch):
+    text = ROUTES.replace("0", ".", 1)
+    here = parse(text)
+    monkeypatch.setattr(routes, "IN_PROCESS_CELLS", 10)  # every map is "large"
+    spawned = []
+    real = routes.ProcessPoolExecutor
+    monkeypatch.setattr(
+        routes, "ProcessPoolExecutor", lambda *a, **k: spawned.append(1) or real(*a, **k)
+    )
+    there = parse(text)
+    assert spawned == [1]
+    assert np.array_equal(here.waypoint, there.waypoint, equal_nan=True)
+    with pytest.raises(
+        ConfigError, match=r"line 1, column 4: this cell cannot reach drop-off area 0"
+    ):
+        parse("P.#.\n..#1\n0.#.")
+    with pytest.raises(ConfigError, match=r"line 1, column 5: this cell is cut off from the floor"):
+        parse("P..#.\n...#0\n0..#.")

@@ -34,25 +34,27 @@ destination ``destinations[d]``; the map is pure data, built once.
 
 from __future__ import annotations
 
-import importlib
-import math
+import functools
 import os
 from dataclasses import dataclass, field
 from importlib import resources
-from typing import Any, Final
+from typing import Final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from swarmtag._checks import check_number
 from swarmtag._inputs import check_path, regular_file
-from swarmtag._resources import check_memory
+from swarmtag._interrupt import checkpoint
+from swarmtag._resources import check_memory, format_bytes
 from swarmtag.errors import ConfigError
 from swarmtag.sim.config.parts import MAX_LENGTH
+from swarmtag.sim.config.routes import search_routes
 
 __all__ = [
     "DROPOFF",
     "FLOOR",
+    "MAX_MAP_BYTES",
     "MAX_MAP_SIDE",
     "PICKUP",
     "SHELF",
@@ -74,6 +76,13 @@ SHIPPED_MAPS: Final[tuple[str, ...]] = ("small-warehouse", "warehouse-hall")
 """Maps shipped in ``presets/maps/<name>.txt``."""
 MAX_MAP_SIDE: Final = 4096
 """Most map lines and most cells per line (routes for 4096 x 4096 cells take gigabytes)."""
+MAX_MAP_BYTES: Final = 32 * 2**20
+"""Largest map file read (bytes): a map of ``MAX_MAP_SIDE`` lines of ``MAX_MAP_SIDE`` cells
+is 16 MiB; as much again for comments and blank lines."""
+_CACHE_SIZE: Final = 4
+"""Parsed maps kept per process (a scenario, its study's scales and runs share one)."""
+_CACHED_MAPS: dict[tuple[object, ...], FloorMap] = {}
+"""Parsed map files by path, cell and file identity; least recently used first."""
 _BYTES_PER_CELL: Final = 300
 """Peak bytes per cell of reading a map: the route graph's eight edges and Dijkstra's arrays."""
 _BYTES_PER_ROUTE: Final = 40
@@ -169,12 +178,13 @@ def _read_only(*arrays: NDArray[np.generic]) -> None:
 def load_floor_map(source: str, *, cell: float) -> FloorMap:
     """A shipped map by name (``"warehouse-hall"``) or a map file by path, parsed and checked.
 
-    Every refusal is a ``ConfigError`` naming the map or file.
+    A file larger than ``MAX_MAP_BYTES`` is refused from its size alone, before
+    it is read. A file is read and parsed once per process while it stays the
+    same file (``_CACHED_MAPS``: its path, cell and ``stat`` identity, size and
+    times). Every refusal is a ``ConfigError`` naming the map or file.
     """
     if source in SHIPPED_MAPS:
-        folder = resources.files("swarmtag.sim.config") / "presets" / "maps"
-        text = (folder / f"{source}.txt").read_text(encoding="utf-8")
-        return parse_floor_map(text, cell=cell, name=source)
+        return _shipped_map(source, cell)
     what = "floor map file"
     path = check_path(source, what=what, error=ConfigError)
     if not os.path.lexists(path):
@@ -183,15 +193,47 @@ def load_floor_map(source: str, *, cell: float) -> FloorMap:
             f"(shipped maps: {', '.join(SHIPPED_MAPS)})"
         )
         raise ConfigError(msg)
+    file = regular_file(path, what=what, error=ConfigError)
     try:
-        text = regular_file(path, what=what, error=ConfigError).read_text(encoding="utf-8")
+        with file.open("rb") as stream:
+            status = os.fstat(stream.fileno())
+            _check_size(source, status.st_size)
+            key: tuple[object, ...] = (source, cell, status.st_dev, status.st_ino)
+            key += (status.st_size, status.st_mtime_ns, status.st_ctime_ns)
+            if key in _CACHED_MAPS:
+                _CACHED_MAPS[key] = _CACHED_MAPS.pop(key)  # most recently used last
+                return _CACHED_MAPS[key]
+            data = stream.read(MAX_MAP_BYTES + 1)  # no more, even if the file grew meanwhile
+        _check_size(source, len(data))
+        text = data.decode("utf-8")
     except OSError as problem:
         msg = f"{source}: cannot read the {what} ({problem.strerror})"
         raise ConfigError(msg) from None
     except UnicodeDecodeError:
         msg = f"{source}: the {what} is not UTF-8 text"
         raise ConfigError(msg) from None
-    return parse_floor_map(text, cell=cell, name=source)
+    floor = parse_floor_map(text, cell=cell, name=source)
+    _CACHED_MAPS[key] = floor
+    while len(_CACHED_MAPS) > _CACHE_SIZE:
+        del _CACHED_MAPS[next(iter(_CACHED_MAPS))]
+    return floor
+
+
+@functools.lru_cache(maxsize=_CACHE_SIZE)
+def _shipped_map(name: str, cell: float) -> FloorMap:
+    folder = resources.files("swarmtag.sim.config") / "presets" / "maps"
+    text = (folder / f"{name}.txt").read_text(encoding="utf-8")
+    return parse_floor_map(text, cell=cell, name=name)
+
+
+def _check_size(source: str, size: int) -> None:
+    if size > MAX_MAP_BYTES:
+        msg = (
+            f"{source}: the floor map file is {format_bytes(size)}; at most "
+            f"{format_bytes(MAX_MAP_BYTES)} is read ({MAX_MAP_SIDE} lines of {MAX_MAP_SIDE} "
+            "cells, with room for comments)"
+        )
+        raise ConfigError(msg)
 
 
 def parse_floor_map(text: str, *, cell: float, name: str = "<map>") -> FloorMap:
@@ -338,36 +380,6 @@ def _check_pickups(kind: NDArray[np.int8], where: _Where, name: str) -> None:
         raise ConfigError(msg)
 
 
-def _csgraph() -> Any:  # noqa: ANN401 - scipy ships no type stubs
-    """``scipy.sparse.csgraph``, imported on first use (it takes a quarter second to import)."""
-    return importlib.import_module("scipy.sparse.csgraph")
-
-
-def _floor_graph(free: NDArray[np.bool_]) -> Any:  # noqa: ANN401 - a scipy sparse matrix
-    """Steps between free cells (flat index row * cols + col): 1 across a side, sqrt(2) diagonally.
-
-    Each step is stored once (east, north, north-east, north-west); the
-    graph is meant to be read as undirected. A diagonal step needs the whole
-    2 x 2 block free, so no route cuts a shelf's corner.
-    """
-    rows, cols = free.shape
-    index = np.arange(rows * cols, dtype=np.int32).reshape(rows, cols)
-    block = free[:-1, :-1] & free[:-1, 1:] & free[1:, :-1] & free[1:, 1:]
-    steps = (
-        (free[:, :-1] & free[:, 1:], index[:, :-1], index[:, 1:], 1.0),
-        (free[:-1, :] & free[1:, :], index[:-1, :], index[1:, :], 1.0),
-        (block, index[:-1, :-1], index[1:, 1:], math.sqrt(2.0)),
-        (block, index[:-1, 1:], index[1:, :-1], math.sqrt(2.0)),
-    )
-    tails = np.concatenate([tail[mask] for mask, tail, _, _ in steps])
-    heads = np.concatenate([head[mask] for mask, _, head, _ in steps])
-    costs = np.concatenate(
-        [np.full(int(mask.sum()), cost, dtype=np.float64) for mask, _, _, cost in steps]
-    )
-    sparse = importlib.import_module("scipy.sparse")
-    return sparse.csr_array((costs, (tails, heads)), shape=(rows * cols, rows * cols))
-
-
 def _waypoints(
     kind: NDArray[np.int8],
     area: NDArray[np.int64],
@@ -379,16 +391,15 @@ def _waypoints(
     name = where.name
     rows, cols = kind.shape
     free = kind != SHELF
-    graph = _floor_graph(free)
+    routes, labels = search_routes(
+        free, [np.flatnonzero(area == destination) for destination in destinations]
+    )
     cells = np.arange(rows * cols)
     centres = np.stack([(cells % cols + 0.5) * cell, (cells // cols + 0.5) * cell], axis=1)
     waypoint = np.full((len(destinations), rows * cols, 2), np.nan, dtype=np.float64)
-    for d, destination in enumerate(destinations):
-        sources = np.flatnonzero(area == destination)
-        distance, previous, _ = _csgraph().dijkstra(
-            graph, directed=False, indices=sources, min_only=True, return_predecessors=True
-        )
-        cut_off = free & ~np.isfinite(distance.reshape(rows, cols))
+    for d, (destination, (reached, previous)) in enumerate(zip(destinations, routes, strict=True)):
+        checkpoint()
+        cut_off = free & ~reached.reshape(rows, cols)
         if cut_off.any():
             row, col = where.first(cut_off)
             msg = (
@@ -398,14 +409,12 @@ def _waypoints(
             raise ConfigError(msg)
         following = np.where(previous >= 0, previous, cells)
         waypoint[d, free.ravel()] = centres[following[free.ravel()]]
-    _check_connected(graph, free, where)
+    _check_connected(labels.reshape(free.shape), free, where)
     return waypoint.reshape(len(destinations), rows, cols, 2)
 
 
-def _check_connected(graph: Any, free: NDArray[np.bool_], where: _Where) -> None:  # noqa: ANN401 - a scipy sparse matrix
+def _check_connected(labels: NDArray[np.int32], free: NDArray[np.bool_], where: _Where) -> None:
     """All non-shelf cells in one piece, so that robots can get from any cell to any other."""
-    _, labels = _csgraph().connected_components(graph, directed=False)
-    labels = labels.reshape(free.shape)
     start = where.first(free)
     apart = free & (labels != labels[start])
     if apart.any():

@@ -17,7 +17,6 @@ array shapes; orders due after the run's end are not part of the run.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 from typing import Final
@@ -35,15 +34,8 @@ _TAIL: Final = 6.0
 """Standard deviations of the order count pre-allocated beyond its mean."""
 
 
-@functools.lru_cache(maxsize=16)
-def _shipped(name: str, cell: float) -> FloorMap:
-    return load_floor_map(name, cell=cell)
-
-
 def floor_of(warehouse: Warehouse) -> FloorMap:
-    """The floor map of ``warehouse`` (shipped maps are parsed once per process)."""
-    if warehouse.map in SHIPPED_MAPS:
-        return _shipped(warehouse.map, warehouse.cell)
+    """The floor map of ``warehouse``: parsed once per process and map (``load_floor_map``)."""
     return load_floor_map(warehouse.map, cell=warehouse.cell)
 
 

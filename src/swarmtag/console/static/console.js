@@ -1,0 +1,264 @@
+// swarmtag console: the floor, the tag table, KPIs and operator writes, from /api/events.
+// Plain JavaScript, no build step. The page's cookie (set by the token URL) authenticates;
+// every write carries the X-Swarmtag-Console header the server requires with the cookie.
+"use strict";
+
+const RAMP = ["#2c7bb6", "#4a98c5", "#74b3d3", "#abd9e9", "#d6eef0",
+  "#ffffbf", "#fed98e", "#fdae61", "#ec6b3e", "#d7191c"];
+const view = { floor: null, state: null, selected: null, sortKey: "urgency", sortUp: false,
+  filter: "", history: [] };
+const $ = (id) => document.getElementById(id);
+
+function show(message, kind) {
+  const el = $("message");
+  el.textContent = message;
+  el.className = kind;
+}
+
+async function api(path, options) {
+  const response = await fetch(path, Object.assign({ credentials: "same-origin" }, options));
+  const body = response.headers.get("content-type")?.includes("json") ? await response.json() : null;
+  return { ok: response.ok, status: response.status, body };
+}
+
+async function write(field, value) {
+  if (view.selected === null) { show("select a tag first", "error"); return; }
+  const marker = view.selected;
+  const answer = await api(`/api/tags/${marker}/${field}`, {
+    method: "POST",
+    headers: { "Content-Type": "application/json", "X-Swarmtag-Console": "1" },
+    body: JSON.stringify({ [field]: value }),
+  });
+  if (answer.ok) {
+    show(`tag ${marker}: ${field} set to ${value} (counter ${answer.body.counter})`, "done");
+    refreshEink();
+  } else {
+    show(`tag ${marker}: ${answer.body ? answer.body.error : "HTTP " + answer.status}`, "error");
+  }
+}
+
+// ---- the floor ---------------------------------------------------------------------------
+function scale() {
+  const canvas = $("floor");
+  const f = view.floor;
+  const s = Math.min(canvas.width / f.arena, canvas.height / f.height);
+  return { s, h: f.height };
+}
+
+function drawStill(ctx, f, s) {
+  ctx.fillStyle = "#fff";
+  ctx.fillRect(0, 0, ctx.canvas.width, ctx.canvas.height);
+  if (f.floor_text) {
+    const lines = f.floor_text.split("\n");
+    lines.forEach((line, row) => {
+      [...line].forEach((ch, col) => {
+        const colour = ch === "#" ? "#555" : ch === "P" ? "#cfe8cf" : /[0-9]/.test(ch) ? "#f6d6b8" : null;
+        if (!colour) return;
+        ctx.fillStyle = colour;
+        ctx.fillRect(col * f.floor_cell * s, row * f.floor_cell * s, f.floor_cell * s + 1, f.floor_cell * s + 1);
+        if (/[0-9]/.test(ch)) { ctx.fillStyle = "#555"; ctx.font = "10px sans-serif";
+          ctx.fillText(ch, (col + 0.3) * f.floor_cell * s, (row + 0.8) * f.floor_cell * s); }
+      });
+    });
+    return;
+  }
+  ctx.fillStyle = "#cfe8cf";
+  ctx.fillRect(0, 0, f.pickup_right * s, f.height * s);
+  ctx.fillStyle = "#f6d6b8";
+  ctx.fillRect(f.dropoff_left * s, 0, (f.arena - f.dropoff_left) * s, f.height * s);
+  ctx.fillStyle = "#555";
+  ctx.font = "12px sans-serif";
+  ctx.fillText("pick-up", 4, 14);
+  ctx.fillText("drop-off", f.dropoff_left * s + 4, 14);
+}
+
+function drawFloor() {
+  if (!view.floor || !view.state) return;
+  const canvas = $("floor");
+  const ctx = canvas.getContext("2d");
+  const f = view.floor;
+  const { s, h } = scale();
+  const X = (x) => x * s;
+  const Y = (y) => (h - y) * s;
+  drawStill(ctx, f, s);
+  const tags = new Map(view.state.tags.map((t) => [t.marker, t]));
+  ctx.setLineDash([4, 4]);
+  ctx.strokeStyle = "#777";
+  for (const r of view.state.robots) {
+    const t = r.target === null ? null : tags.get(r.target);
+    if (t && t.carried_by !== r.id) {
+      ctx.beginPath(); ctx.moveTo(X(r.x), Y(r.y)); ctx.lineTo(X(t.x), Y(t.y)); ctx.stroke();
+    }
+  }
+  ctx.setLineDash([]);
+  const half = Math.max(5, (f.carrier_size * s) / 2);
+  const drawn = [];
+  for (const t of view.state.tags) {
+    if (!t.present) continue;
+    ctx.fillStyle = t.status === "idle" ? "#bbb" : RAMP[t.urgency];
+    ctx.fillRect(X(t.x) - half, Y(t.y) - half, 2 * half, 2 * half);
+    ctx.lineWidth = t.marker === view.selected ? 3 : 1;
+    ctx.strokeStyle = t.marker === view.selected ? "#000" : t.overdue ? "#b00" : "#333";
+    ctx.strokeRect(X(t.x) - half, Y(t.y) - half, 2 * half, 2 * half);
+    ctx.fillStyle = t.urgency >= 7 || t.urgency <= 1 ? "#fff" : "#000";
+    ctx.font = `bold ${Math.round(half * 1.2)}px sans-serif`;
+    ctx.textAlign = "center"; ctx.textBaseline = "middle";
+    ctx.fillText(String(t.urgency), X(t.x), Y(t.y));
+    drawn.push(`${t.marker}:${t.urgency}`);
+  }
+  ctx.lineWidth = 1;
+  const radius = Math.max(4, f.robot_radius * s);
+  for (const r of view.state.robots) {
+    ctx.beginPath(); ctx.arc(X(r.x), Y(r.y), radius, 0, 2 * Math.PI);
+    ctx.fillStyle = r.mode === "broken" ? "#900" : "#24323f"; ctx.fill();
+    ctx.beginPath(); ctx.moveTo(X(r.x), Y(r.y));
+    ctx.lineTo(X(r.x + r.hx * f.robot_radius * 1.6), Y(r.y + r.hy * f.robot_radius * 1.6));
+    ctx.strokeStyle = "#fff"; ctx.stroke();
+  }
+  ctx.textAlign = "start"; ctx.textBaseline = "alphabetic";
+  canvas.dataset.urgencies = drawn.join(",");  // what was drawn, for tests and tools
+}
+
+function pickOnFloor(event) {
+  if (!view.floor || !view.state) return;
+  const canvas = $("floor");
+  const box = canvas.getBoundingClientRect();
+  const { s, h } = scale();
+  const x = ((event.clientX - box.left) * canvas.width / box.width) / s;
+  const y = h - ((event.clientY - box.top) * canvas.height / box.height) / s;
+  let best = null; let bestD = Infinity;
+  for (const t of view.state.tags) {
+    if (!t.present) continue;
+    const d = Math.hypot(t.x - x, t.y - y);
+    if (d < bestD) { best = t; bestD = d; }
+  }
+  if (best && bestD < Math.max(view.floor.carrier_size, 12 / s)) select(best.marker);
+}
+
+// ---- the table, the alerts, the selection ----------------------------------------------
+function cell(row, text, cls) {
+  const td = document.createElement("td");
+  td.textContent = text === null || text === undefined ? "–" : String(text);
+  if (cls) td.className = cls;
+  row.appendChild(td);
+}
+
+function drawTable() {
+  const body = document.querySelector("#tags tbody");
+  const needle = view.filter.trim().toLowerCase();
+  const rows = view.state.tags.filter((t) => !needle ||
+    [t.marker, t.status, t.destination, t.carried_by ?? ""].join(" ").toLowerCase().includes(needle));
+  const k = view.sortKey;
+  rows.sort((a, b) => {
+    const va = a[k] ?? -Infinity; const vb = b[k] ?? -Infinity;
+    const order = va < vb ? -1 : va > vb ? 1 : a.marker - b.marker;
+    return view.sortUp ? order : -order;
+  });
+  const fresh = document.createDocumentFragment();
+  for (const t of rows) {
+    const tr = document.createElement("tr");
+    tr.dataset.marker = t.marker;
+    if (t.marker === view.selected) tr.classList.add("selected");
+    if (t.overdue) tr.classList.add("overdue");
+    cell(tr, t.marker, "marker"); cell(tr, t.urgency, "urgency"); cell(tr, t.status, "status");
+    cell(tr, t.destination, "destination"); cell(tr, t.last_heard, "last-heard");
+    cell(tr, t.carried_by === null ? "" : "robot " + t.carried_by, "carried-by");
+    cell(tr, t.delivered_at === null ? t.waited : "delivered", "waited");
+    fresh.appendChild(tr);
+  }
+  body.replaceChildren(fresh);
+  document.querySelectorAll("#tags th").forEach((th) => {
+    th.classList.toggle("sorted-up", th.dataset.key === k && view.sortUp);
+    th.classList.toggle("sorted-down", th.dataset.key === k && !view.sortUp);
+  });
+  const alerts = view.state.tags.filter((t) => t.overdue);
+  $("alerts").replaceChildren(...alerts.map((t) => {
+    const li = document.createElement("li");
+    li.dataset.marker = t.marker;
+    li.textContent = `carrier ${t.marker}: waiting ${Math.round(t.waited)} s (urgency ${t.urgency})`;
+    return li;
+  }));
+  if (!alerts.length) $("alerts").textContent = "none";
+  const current = view.state.tags.find((t) => t.marker === view.selected);
+  document.querySelectorAll("#urgency-buttons button").forEach((b) =>
+    b.classList.toggle("current", current !== undefined && Number(b.dataset.urgency) === current.urgency));
+}
+
+function refreshEink() {
+  if (view.selected === null) return;
+  const img = $("eink");
+  img.src = `/api/tags/${view.selected}/eink?at=${Date.now()}`;
+  img.hidden = false;
+}
+
+function select(marker) {
+  view.selected = marker;
+  $("selected-marker").textContent = String(marker);
+  show("", "");
+  refreshEink();
+  if (view.state) { drawTable(); drawFloor(); }
+}
+
+// ---- KPIs -----------------------------------------------------------------------------------
+function fmt(value, unit) { return value === null ? "–" : `${value}${unit}`; }
+
+function showKpis(k) {
+  $("kpi-deliveries").textContent = `${k.deliveries} (${k.runs} run${k.runs === 1 ? "" : "s"})`;
+  $("kpi-p95").textContent = fmt(k.p95_latency, " s");
+  $("kpi-mean").textContent = fmt(k.mean_latency, " s");
+  $("kpi-pa").textContent = k.pa.toFixed(3);
+  $("kpi-throughput").textContent = fmt(k.throughput, " / 100 s");
+  view.history.push(k.deliveries);
+  if (view.history.length > 120) view.history.shift();
+  const c = $("sparkline"); const ctx = c.getContext("2d");
+  ctx.clearRect(0, 0, c.width, c.height);
+  const lo = Math.min(...view.history); const hi = Math.max(...view.history, lo + 1);
+  ctx.beginPath();
+  view.history.forEach((v, i) => {
+    const x = (i / Math.max(1, view.history.length - 1)) * (c.width - 2) + 1;
+    const y = c.height - 2 - ((v - lo) / (hi - lo)) * (c.height - 4);
+    if (i === 0) ctx.moveTo(x, y); else ctx.lineTo(x, y);
+  });
+  ctx.strokeStyle = "#2c7bb6"; ctx.stroke();
+}
+
+// ---- start ----------------------------------------------------------------------------------
+async function start() {
+  const floor = await api("/api/floor");
+  if (!floor.ok) { $("clock").textContent = "not authorised: open the URL the server printed"; return; }
+  view.floor = floor.body;
+  const canvas = $("floor");
+  canvas.height = Math.round(canvas.width * view.floor.height / view.floor.arena);
+  const buttons = $("urgency-buttons");
+  for (let u = 0; u <= 9; u++) {
+    const b = document.createElement("button");
+    b.type = "button"; b.textContent = String(u); b.dataset.urgency = String(u);
+    b.style.background = RAMP[u]; b.style.color = u >= 7 || u <= 1 ? "#fff" : "#000";
+    b.addEventListener("click", () => write("urgency", u));
+    buttons.appendChild(b);
+  }
+  $("destination-select").replaceChildren(...view.floor.destinations.map((d) => new Option(String(d), String(d))));
+  $("status-apply").addEventListener("click", () => write("status", $("status-select").value));
+  $("destination-apply").addEventListener("click", () => write("destination", Number($("destination-select").value)));
+  $("filter").addEventListener("input", (e) => { view.filter = e.target.value; if (view.state) drawTable(); });
+  document.querySelectorAll("#tags th").forEach((th) => th.addEventListener("click", () => {
+    if (view.sortKey === th.dataset.key) view.sortUp = !view.sortUp;
+    else { view.sortKey = th.dataset.key; view.sortUp = true; }
+    drawTable();
+  }));
+  document.querySelector("#tags tbody").addEventListener("click", (e) => {
+    const tr = e.target.closest("tr"); if (tr) select(Number(tr.dataset.marker));
+  });
+  canvas.addEventListener("click", pickOnFloor);
+  const events = new EventSource("/api/events");
+  events.addEventListener("open", () => { $("link").textContent = "live"; $("link").className = "ok"; });
+  events.addEventListener("error", () => { $("link").textContent = "offline"; $("link").className = "bad"; });
+  events.addEventListener("state", (e) => {
+    view.state = JSON.parse(e.data);
+    $("clock").textContent = `run ${view.state.run} · t = ${view.state.time.toFixed(1)} s · ${view.floor.speed}× real time`;
+    drawFloor(); drawTable();
+  });
+  events.addEventListener("kpis", (e) => showKpis(JSON.parse(e.data)));
+}
+
+start();
