@@ -157,6 +157,62 @@ def test_study_report_on_a_full_disk(device, tmp_path, capsys):
     assert everything(device) == before
 
 
+def test_calibrate_on_a_full_disk_names_its_profile(device, tmp_path, capsys):
+    # the cache of evaluated points lives elsewhere: it is kept on purpose (resumable)
+    target = old_target(device, "fit.toml")
+    fill(device)
+    before = everything(device)
+    argv = ["calibrate", "--baseline", "paper-sim", "--free", "camera.range=0.5:2"]
+    argv += ["--evaluations", "2", "--runs", "1", "--workers", "1", "--no-progress"]
+    argv += ["--cache", str(tmp_path / "fit.cache.jsonl"), "--out", str(target)]
+    code, err = run(capsys, argv)
+    assert code == 2, err
+    lines = err.splitlines()
+    assert lines[-1] == f"swarmtag: error: no space left on device while writing {target}", err
+    assert all(not line.startswith("swarmtag: error:") for line in lines[:-1]), err
+    assert everything(device) == before
+
+
+def test_tag_write_with_its_counters_on_a_full_disk_sends_nothing(device, tmp_path, capsys):
+    pytest.importorskip("bleak")
+    from swarmtag.tag import (
+        FileStore,
+        TagModel,
+        TagState,
+        TagStatus,
+        derive_robot_key,
+        generate_site_key,
+        read_key_file,
+        write_key_file,
+        write_robot_key_file,
+    )
+
+    site = write_key_file(tmp_path / "site.key", generate_site_key())
+    site_key = read_key_file(site)
+    write_robot_key_file(tmp_path / "robot.key", 7, derive_robot_key(site_key, 7))
+    waiting = TagState(urgency=5, status=TagStatus.AWAITING_PICKUP, destination=2, marker=12)
+    state = tmp_path / "tag.state"
+    TagModel.provision(waiting, site_key=site_key, store=FileStore(state))
+    kept = state.read_bytes()
+    counters = device / "robot.counters"
+    fill(device)
+    before = everything(device)
+    code, err = run(capsys, [
+        "tag", "write", "aa:bb:cc:dd:ee:01", "--key-file", str(tmp_path / "robot.key"),
+        "--writer", "7", "--role", "robot", "--status", "picked_up", "--counter-file",
+        str(counters), "--backend", "loopback", "--loopback-state", str(state),
+        "--loopback-key", str(site),
+    ])  # fmt: skip
+    assert code == 2, err
+    assert len(err.splitlines()) == 1, err
+    assert err == (
+        f"swarmtag: error: cannot save counter file {counters}: no space left on device; "
+        "nothing was sent\n"
+    )
+    assert everything(device) == before
+    assert state.read_bytes() == kept  # the tag never heard the write
+
+
 # --- the device's refusal injected: no root needed -----------------------------------------
 
 
