@@ -28,6 +28,15 @@ leaves its working folder exactly as it was (no staging folder, no
 then with exactly one ``swarmtag: refused:`` line, and nothing written but
 its outputs (the counter it spent).
 
+The commands that write files (``FULL_DISK_EXAMPLES``, 200 invocations in
+all) are fuzzed once more on a full disk: the same invocations, with the
+working folders on an 8 MiB tmpfs that is filled to its last byte after an
+invocation's inputs are made and freed when it returns (root only; skipped
+with the reason elsewhere). There an invocation may exit 0 only if it wrote
+nothing (it printed help, or its results on stdout), never having failed to
+write an output it names; otherwise it exits 2 with exactly one
+``swarmtag: error:`` line, and its folder is exactly as it was.
+
 Invocations are kept cheap: simulations get at most 30 ticks (and a static
 time limit of 30) unless those are drawn, resample, run and evaluation counts
 are small in the valid branch, one worker process, and
@@ -39,7 +48,7 @@ refuses them before their first simulation.
 The seed is 0 unless pinned, and printed with every failure (also one that
 is not an invocation's, such as a template that cannot be made); pin another
 one, and ask for more invocations in all (shared out over the commands as in
-the normal mode)::
+the normal mode; the full-disk invocations are scaled alike)::
 
     SWARMTAG_FUZZ_SEED=7 SWARMTAG_FUZZ_EXAMPLES=20000 \\
         pytest -q -p no:cacheprovider tests/cli/test_fuzz.py
@@ -101,6 +110,7 @@ from tests.cli.fuzz_values import (
     junk,
     values,
 )
+from tests.full_disk import fill, free, tmpfs
 from tests.io.bag_builders import write_fuzz_bags
 
 SEED = int(os.environ.get("SWARMTAG_FUZZ_SEED", "0"))
@@ -132,8 +142,29 @@ NORMAL_EXAMPLES = {
     ("console",): 40,  # the server returns at once (test_fuzz_command): its set-up is fuzzed
 }
 """Invocations per command in the normal suite (2,633 in all)."""
+FULL_DISK_EXAMPLES = {
+    ("simulate",): 25,
+    ("metrics",): 25,
+    ("calibrate",): 15,
+    ("study", "run"): 15,
+    ("study", "report"): 10,
+    ("reproduce",): 10,
+    ("robot", "tree"): 10,
+    ("tag", "render"): 10,
+    ("tag", "keygen"): 15,
+    ("tag", "write"): 15,
+    ("tag", "emulate"): 15,
+    ("log", "import"): 15,
+    ("aruco", "render"): 10,
+    ("console",): 10,
+}
+"""Invocations per writing command on a full disk in the normal suite (200 in all)."""
+FULL_DISK_SIZE = "8m"
+"""The tmpfs that holds the working folders of the full-disk invocations."""
 TOTAL = int(os.environ.get("SWARMTAG_FUZZ_EXAMPLES", "0")) or sum(NORMAL_EXAMPLES.values())
-"""Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``."""
+"""Invocations in all (``SWARMTAG_FUZZ_EXAMPLES``), shared out as in ``NORMAL_EXAMPLES``;
+the full-disk ones are scaled alike (``FULL_DISK_EXAMPLES``), on top.
+"""
 HANG_SECONDS = 60
 """One invocation running longer than this is reported as a hang."""
 MEMORY = "2GiB"
@@ -146,8 +177,8 @@ REFUSING = {("tag", "write"): "swarmtag: refused: "}
 """Commands that exit 1 when the device they talk to refuses, with the line they print then."""
 
 
-def examples(path: tuple[str, ...]) -> int:
-    share = NORMAL_EXAMPLES[path] * TOTAL / sum(NORMAL_EXAMPLES.values())
+def examples(path: tuple[str, ...], budget: dict[tuple[str, ...], int] = NORMAL_EXAMPLES) -> int:
+    share = budget[path] * TOTAL / sum(NORMAL_EXAMPLES.values())
     return max(1, round(share))
 
 
@@ -427,12 +458,17 @@ def not_written(outputs: Sequence[tuple[str, Token]]) -> list[str]:
 
 @dataclass
 class Fuzzer:
-    """Runs invocations in fresh working folders under ``root`` and checks each one."""
+    """Runs invocations in fresh working folders under ``root`` and checks each one.
+
+    With ``full_disk``, ``root`` is a small tmpfs: it is filled once an invocation's inputs
+    are made, just before the command runs, and freed as soon as it has returned.
+    """
 
     root: Path
     templates: dict[str, Path]
     capsys: pytest.CaptureFixture[str]
     monkeypatch: pytest.MonkeyPatch
+    full_disk: bool = False
     count: int = 0
     seconds: float = 0.0
     successes: int = 0
@@ -450,6 +486,8 @@ class Fuzzer:
         self.capsys.readouterr()
         code: object = None
         crash = ""
+        if self.full_disk:
+            fill(self.root)
         started = time.perf_counter()
         try:
             with watchdog(HANG_SECONDS):
@@ -458,13 +496,19 @@ class Fuzzer:
             code = exited.code
         except BaseException:  # noqa: BLE001 - anything else is the bug being looked for
             crash = traceback.format_exc()
-        took = time.perf_counter() - started
+        finally:
+            took = time.perf_counter() - started
+            if self.full_disk:
+                free(self.root)
         out, err = self.capsys.readouterr()
         self.count += 1
         self.seconds += took
         self.slowest = sorted([*self.slowest, (took, argv)], reverse=True)[:5]
         result = Result(argv, code, crash, out, err)
-        result.check(call, before, snapshot(work))
+        after = snapshot(work)
+        if self.full_disk:  # a failure must not leave the small device short of room
+            shutil.rmtree(work, ignore_errors=True)
+        result.check(call, before, after, full_disk=self.full_disk)
         self.successes += code == 0
         shutil.rmtree(work, ignore_errors=True)
         if any(self.root.glob(f"{STAGING_PREFIX}*")):
@@ -473,7 +517,8 @@ class Fuzzer:
     def summary(self, path: tuple[str, ...]) -> str:
         slowest = "; ".join(f"{t:.2f} s {a[:8]}" for t, a in self.slowest[:3])
         return (
-            f"fuzz {' '.join(path) or 'swarmtag'}: {self.count} invocations "
+            f"fuzz {' '.join(path) or 'swarmtag'}{' on a full disk' * self.full_disk}: "
+            f"{self.count} invocations "
             f"({self.successes} succeeded) in {self.seconds:.1f} s, seed {SEED}; "
             f"slowest: {slowest}"
         )
@@ -496,8 +541,12 @@ class Result:
             pytrace=False,
         )
 
-    def check(self, call: Invocation, before: Snapshot, after: Snapshot) -> None:
-        """The contract of one invocation (see the module docstring)."""
+    def check(
+        self, call: Invocation, before: Snapshot, after: Snapshot, *, full_disk: bool = False
+    ) -> None:
+        """The contract of one invocation (see the module docstring); on a full disk nothing
+        can be written, so only an invocation that wrote nothing may exit 0 (or 1).
+        """
         if self.crash:
             self.fail("raised instead of exiting")
         refused = self.code == 1 and call.path in REFUSING
@@ -524,6 +573,8 @@ class Result:
             if self.code == 2:
                 self.check_refusal()
             return
+        if full_disk and changed:
+            self.fail(f"exit {self.code!r} on a full disk, having written {changed}")
         self.check_said(call, refused=refused)
         stray = [p for p in changed if not allowed(p, call.outputs)]
         if stray:
@@ -558,10 +609,15 @@ class Result:
 # --- the tests ----------------------------------------------------------------------------------
 
 
-def fuzz(path: tuple[str, ...], strategy: st.SearchStrategy[Invocation], fuzzer: Fuzzer) -> None:
+def fuzz(
+    path: tuple[str, ...],
+    strategy: st.SearchStrategy[Invocation],
+    fuzzer: Fuzzer,
+    budget: dict[tuple[str, ...], int] = NORMAL_EXAMPLES,
+) -> None:
     @seed(SEED)
     @settings(
-        max_examples=examples(path),
+        max_examples=examples(path, budget),
         deadline=None,
         database=None,
         suppress_health_check=list(HealthCheck),
@@ -596,12 +652,30 @@ def test_every_command_and_option_is_fuzzed():
         assert set(OUTPUTS.get(path, {})) | set(INPUTS.get(path, ())) <= names, path
 
 
+def serve_nothing(path: tuple[str, ...], monkeypatch: pytest.MonkeyPatch) -> None:
+    """``console`` runs everything up to serving: the server stops as soon as it starts."""
+    if path == ("console",):
+        uvicorn = pytest.importorskip("uvicorn")
+        monkeypatch.setattr(uvicorn.Server, "run", lambda _server, sockets=None: None)
+
+
 @pytest.mark.parametrize("path", sorted(COMMANDS), ids=" ".join)
 def test_fuzz_command(path, fuzzer):
-    if path == ("console",):  # everything up to serving: the server stops as soon as it starts
-        uvicorn = pytest.importorskip("uvicorn")
-        fuzzer.monkeypatch.setattr(uvicorn.Server, "run", lambda _server, sockets=None: None)
+    serve_nothing(path, fuzzer.monkeypatch)
     fuzz(path, invocations(path), fuzzer)
+
+
+def test_every_writing_command_is_fuzzed_on_a_full_disk():
+    assert set(OUTPUTS) <= set(FULL_DISK_EXAMPLES) <= set(COMMANDS)
+
+
+@pytest.mark.parametrize("path", sorted(FULL_DISK_EXAMPLES), ids=" ".join)
+def test_fuzz_command_on_a_full_disk(path, tmp_path, templates, capsys, monkeypatch):
+    """The same invocations with the working folder on a tmpfs filled before the command runs."""
+    serve_nothing(path, monkeypatch)
+    with tmpfs(tmp_path / "device", FULL_DISK_SIZE) as device:
+        fuzzer = Fuzzer(device, templates, capsys, monkeypatch, full_disk=True)
+        fuzz(path, invocations(path), fuzzer, FULL_DISK_EXAMPLES)
 
 
 ROOT_WORDS = ("--help", "-h", "--version", "tag", "study", "nope", "", "-", "--", "Simulate")

@@ -32,7 +32,7 @@ def test_a_file_that_holds_something_else_is_refused(tmp_path):
 
 
 def test_token_file_in_a_missing_folder_is_one_clear_error(tmp_path):
-    with pytest.raises(ConfigError, match="cannot open"):
+    with pytest.raises(ConfigError, match="cannot write it"):
         load_or_create_token(tmp_path / "missing" / "token")
 
 

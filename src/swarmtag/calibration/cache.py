@@ -27,6 +27,7 @@ whole, since appending to it would damage what it is.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import math
@@ -37,6 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, Final, NoReturn
 
+from swarmtag._atomic import write_failure
 from swarmtag._checks import check_path, show
 from swarmtag.calibration.objective import Achieved
 from swarmtag.errors import CalibrationError
@@ -352,6 +354,7 @@ class EvaluationCache:
         }
         record["check"] = _check(record)
         line = json.dumps(record, sort_keys=True, allow_nan=False) + "\n"
+        existed = self.path.exists()
         try:
             with self.path.open("a+b") as handle:
                 handle.seek(0, os.SEEK_END)
@@ -363,4 +366,10 @@ class EvaluationCache:
                 handle.flush()
                 os.fsync(handle.fileno())
         except OSError as error:
+            if not existed:  # created just now and never written: leave nothing behind
+                with contextlib.suppress(OSError):
+                    self.path.unlink()
+            failure = write_failure(error, self.path)  # a full disk: said as every output says it
+            if failure is not None:
+                raise failure from None
             raise CalibrationError(f"--cache {self.path}: cannot append to it ({error})") from None

@@ -113,7 +113,8 @@ def console_cmd(
     """
     del sim  # the only source so far
     from swarmtag.console.audit import DEFAULT_AUDIT_LOG  # noqa: PLC0415 - lazy
-    from swarmtag.console.server import ConsoleSettings, build_core, serve  # noqa: PLC0415
+    from swarmtag.console.auth import load_or_create_token  # noqa: PLC0415 - lazy
+    from swarmtag.console.server import ConsoleSettings, bind, build_core, serve  # noqa: PLC0415
     from swarmtag.policy import parse_policy  # noqa: PLC0415 - loads numpy
 
     _needs_extra()
@@ -132,13 +133,19 @@ def console_cmd(
             overdue_s=overdue,
         )
     )
+    sock = bind(host, port)
+    try:
+        token = load_or_create_token(token_file)  # the last check, and the first file
+    except BaseException:
+        sock.close()
+        raise
     if host not in _LOCAL:
         click.echo(
             f"swarmtag: warning: --host {host} serves the console beyond this machine; "
             "the token is all that guards it, and it travels unencrypted",
             err=True,
         )
-    serve(core, token_file=token_file, host=host, port=port, say=_say)
+    serve(core, token=token, sock=sock, host=host, say=_say)
 
 
 def _say(line: str) -> None:

@@ -28,13 +28,17 @@ class AuditLog:
     """Appends audit lines to ``path`` (created with mode 0600 if absent)."""
 
     def __init__(self, path: Path) -> None:
+        """Check ``path`` now; create it only with the first line.
+
+        Its folder must exist, and it must be absent or a file this process
+        can append to; a console that fails to start leaves no file behind.
+        """
         self.path = path
         self._lock = threading.Lock()
-        try:
-            fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o600)
-        except OSError as error:
-            raise ConfigError(f"--audit-log {path}: cannot open it ({error.strerror})") from None
-        os.close(fd)
+        if not path.parent.is_dir():
+            raise ConfigError(f"--audit-log {path}: the folder {path.parent} does not exist")
+        if path.exists() and not (path.is_file() and os.access(path, os.W_OK)):
+            raise ConfigError(f"--audit-log {path}: not a file this process can append to")
 
     def record(
         self,
@@ -58,6 +62,8 @@ class AuditLog:
         if reason is not None:
             line["reason"] = reason
         text = json.dumps(line, sort_keys=False) + "\n"
-        with self._lock, self.path.open("a", encoding="utf-8") as out:
-            out.write(text)
+        with self._lock:
+            fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o600)
+            with os.fdopen(fd, "a", encoding="utf-8") as out:
+                out.write(text)
         return line

@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 from typing import Final
 
+from swarmtag._atomic import WriteFailure, atomic_path
 from swarmtag.errors import ConfigError
 
 __all__ = [
@@ -41,25 +42,41 @@ _MAX_TOKEN_FILE: Final = 1024
 def load_or_create_token(path: Path) -> str:
     """The token in ``path``, or a new random one written there with mode 0600."""
     try:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+        fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW)
+    except FileNotFoundError:
+        return _new_token(path)
     except OSError as error:
         raise ConfigError(f"--token-file {path}: cannot open it ({error.strerror})") from None
     with os.fdopen(fd, "r+", encoding="ascii", errors="replace") as handle:
         if os.fstat(handle.fileno()).st_mode & 0o077:
             os.fchmod(handle.fileno(), 0o600)
         text = handle.read(_MAX_TOKEN_FILE).strip()
-        if _TOKEN.fullmatch(text):
-            return text
-        if text:
-            raise ConfigError(
-                f"--token-file {path}: holds something that is not a console token; "
-                "remove it or name another file"
-            )
-        token = secrets.token_urlsafe(32)
-        handle.write(token + "\n")
-        handle.flush()
-        os.fsync(handle.fileno())
-        return token
+    if _TOKEN.fullmatch(text):
+        return text
+    if text:
+        raise ConfigError(
+            f"--token-file {path}: holds something that is not a console token; "
+            "remove it or name another file"
+        )
+    return _new_token(path)
+
+
+def _new_token(path: Path) -> str:
+    """A new random token, written to ``path`` (mode 0600) whole or not at all.
+
+    Written aside and renamed into place, so that a full disk leaves no empty
+    token file behind (one line naming the file, as every output).
+    """
+    token = secrets.token_urlsafe(32)
+    try:
+        with atomic_path(path) as temporary:
+            temporary.chmod(0o600)
+            temporary.write_text(token + "\n", encoding="ascii")
+    except WriteFailure:
+        raise
+    except OSError as error:
+        raise ConfigError(f"--token-file {path}: cannot write it ({error.strerror})") from None
+    return token
 
 
 def token_matches(given: str | None, token: str) -> bool:

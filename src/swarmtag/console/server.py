@@ -20,7 +20,7 @@ from typing import Final, cast
 
 from swarmtag.console.api import ConsoleCore
 from swarmtag.console.audit import AuditLog
-from swarmtag.console.auth import RateLimiter, load_or_create_token
+from swarmtag.console.auth import RateLimiter
 from swarmtag.console.sim_source import SimSource
 from swarmtag.console.writes import OperatorDesk
 from swarmtag.errors import ConfigError
@@ -88,18 +88,20 @@ def bind(host: str, port: int) -> socket.socket:
 def serve(
     core: ConsoleCore,
     *,
-    token_file: Path,
+    token: str,
+    sock: socket.socket,
     host: str,
-    port: int,
     say: Callable[[str], None],
 ) -> None:
-    """Serve ``core`` on ``host:port`` until interrupted; ``say`` prints the URL line."""
+    """Serve ``core`` on ``sock`` (``bind``'s) until interrupted; ``say`` prints the URL line.
+
+    ``token`` is ``auth.load_or_create_token``'s: the command reads (or
+    writes) it last of all its checks, so that a refused start leaves no file.
+    """
     import uvicorn  # noqa: PLC0415 - the console extra
 
     from swarmtag.console.app import make_app  # noqa: PLC0415 - needs starlette
 
-    token = load_or_create_token(token_file)
-    sock = bind(host, port)
     bound = sock.getsockname()[1]
     shown = f"[{host}]" if ":" in host else host
     say(f"swarmtag console: http://{shown}:{bound}/?token={token}")
