@@ -1,8 +1,9 @@
 """A seeded fuzzer of the public library API: hostile values in, a result or a swarmtag error out.
 
 Every public function of ``swarmtag.analysis``, ``swarmtag.calibration``,
-``swarmtag.policy``, ``swarmtag.robot`` and ``swarmtag.notebook`` (and the
-policies' constructors) is called with arguments drawn per call: each one is
+``swarmtag.policy``, ``swarmtag.robot``, ``swarmtag.notebook``,
+``swarmtag.io``, ``swarmtag.perception`` and ``swarmtag.experiments`` (and
+the policies' and a few records' constructors) is called with arguments drawn per call: each one is
 a valid value or, with a chance drawn per call (so that some calls are
 wholly valid and reach deep), a hostile one: NaN, infinities, -1, 0, huge
 integers, ``1e308``, ``-0.0``, booleans, ``None``, strings, empty and nested
@@ -57,6 +58,9 @@ PACKAGES = (
     "swarmtag.policy",
     "swarmtag.robot",
     "swarmtag.notebook",
+    "swarmtag.io",
+    "swarmtag.perception",
+    "swarmtag.experiments",
 )
 """The packages whose public functions are fuzzed here (``swarmtag.tag``: tests/tag)."""
 
@@ -346,6 +350,151 @@ def robot_targets(w: dict[str, Any]) -> list[Target]:
     ]
 
 
+@cache
+def edge_world() -> dict[str, Any]:
+    """Valid inputs of the io, perception and experiments functions: files, a rig, a study."""
+    from swarmtag.experiments import ResultsStore, load_study
+    from swarmtag.io import format_csv, write_event_log, write_event_table
+    from swarmtag.perception import Placement, detect_markers, load_rig, render
+
+    w = world()
+    folder = Path(tempfile.mkdtemp(prefix="api-fuzz-edge-"))
+    for suffix in ("csv", "parquet"):
+        write_event_log(w["log"], folder / f"log.{suffix}")
+        write_event_table(w["events"], folder / f"events.{suffix}")
+    rig = load_rig()
+    front = rig.camera("front")
+    placement = Placement.at(7, 1.0, 0.0)
+    image = render(front, rig.carrier, [placement], rng=np.random.default_rng(0))
+    study = load_study("controller-selection")
+    return {
+        "folder": folder,
+        "log_csv": format_csv(w["log"]),
+        "events_csv": format_csv(w["events"]),
+        "rig": rig,
+        "front": front,
+        "placement": placement,
+        "image": image,
+        "detections": detect_markers(image, front, rig.carrier),
+        "study": study,
+        "store": ResultsStore(folder / "results.duckdb"),
+    }
+
+
+def io_targets(w: dict[str, Any]) -> list[Target]:
+    import swarmtag.io as i
+
+    e = edge_world()
+    folder = e["folder"]
+    tables = (w["log"], w["events"])
+    logs = (folder / "log.csv", folder / "log.parquet")
+    events = (folder / "events.csv", folder / "events.parquet")
+    out = (str(folder / "out.csv"), folder / "out.parquet")
+    source = frozenset({"source"})
+    return [
+        Target("format_csv", i.format_csv, {"table": tables}),
+        Target("parse_carrier_csv", i.parse_carrier_csv, {"t": (e["log_csv"],), "source": (None, "x.csv")}, source),
+        Target("parse_event_csv", i.parse_event_csv, {"t": (e["events_csv"],), "source": (None,)}, source),
+        Target("read_carrier_csv", i.read_carrier_csv, {"path": logs[:1]}),
+        Target("read_carrier_parquet", i.read_carrier_parquet, {"path": logs[1:]}),
+        Target("read_event_csv", i.read_event_csv, {"path": events[:1]}),
+        Target("read_event_parquet", i.read_event_parquet, {"path": events[1:]}),
+        Target("read_event_log", i.read_event_log, {"path": logs}),
+        Target("read_event_table", i.read_event_table, {"path": events}),
+        Target("write_csv", i.write_csv, {"table": tables, "path": out[:1]}),
+        Target("write_parquet", i.write_parquet, {"table": tables, "path": out[1:]}),
+        Target("write_event_log", i.write_event_log, {"log": tables[:1], "path": out}),
+        Target("write_event_table", i.write_event_table, {"table": tables[1:], "path": out}),
+        Target("CarrierLog.concat", i.CarrierLog.concat, {"tables": ([w["log"]],)}),
+        Target("EventTable.concat", i.EventTable.concat, {"tables": ([w["events"]],)}),
+    ]  # fmt: skip
+
+
+def few_samples(rig: object, *, samples: object, **kwargs: Any) -> object:
+    """``run_range_study`` with a legal count above 3 (an image takes a second) drawn as 3."""
+    from swarmtag.perception import run_range_study
+
+    if isinstance(samples, int) and not isinstance(samples, bool) and 3 < samples < 10**6:
+        samples = 3
+    return run_range_study(rig, samples=samples, **kwargs)
+
+
+def perception_targets(w: dict[str, Any]) -> list[Target]:
+    import swarmtag.perception as p
+
+    e = edge_world()
+    rig, front, carrier = e["rig"], e["front"], e["rig"].carrier
+    placements = ([e["placement"]], [])
+    mapping = {
+        "name": "x",
+        "cameras": [
+            {
+                "name": "front",
+                "kind": "perimeter",
+                "width": 64,
+                "height": 48,
+                "horizontal_fov": 90.0,
+                "x": 0.1,
+                "y": 0.0,
+                "z": 0.1,
+            }
+        ],
+    }
+    return [
+        Target("centring_offset", p.centring_offset, {"d": (e["detections"], []), "m": (None, 7)}),
+        Target("detect_markers", p.detect_markers, {"i": (e["image"],), "c": (front,), "k": (carrier,)}),
+        Target("fuse", p.fuse, {"d": (e["detections"],), "k": (carrier,), "heading": (None, 0.0)}, frozenset({"heading"})),
+        Target("load_rig", p.load_rig, {"name": ("dots-like", "dots")}),
+        Target("marker_frames", p.marker_frames, {"carrier": (carrier,)}),
+        Target("read_rig_file", p.read_rig_file, {"path": (p.rig_path("dots"),)}),
+        Target(
+            "render",
+            p.render,
+            {"c": (front,), "k": (carrier,), "p": placements, "n": (p.Conditions(),),
+             "rng": (np.random.default_rng(0),)},
+            frozenset({"rng"}),
+        ),
+        Target("rig_from_mapping", p.rig_from_mapping, {"data": (mapping,), "source": (None, "x")}, frozenset({"source"})),
+        Target("rig_path", p.rig_path, {"name": ("dots",)}),
+        Target(
+            "run_range_study",
+            few_samples,
+            {"rig": (rig,), "distances": ((1.0,),), "bearings": ((0.0,),), "samples": (1,),
+             "seed": (0,), "marker": (7,)},
+            frozenset({"distances", "bearings", "samples", "seed", "marker"}),
+        ),
+        Target("to_gray", p.to_gray, {"image": (e["image"],), "camera": (front,)}),
+        Target(
+            "visible_markers",
+            p.visible_markers,
+            {"c": (front,), "k": (carrier,), "p": placements, "margin": (1.0, 0.0)},
+            frozenset({"margin"}),
+        ),
+        Target("Intrinsics.from_fov", p.Intrinsics.from_fov, {"w": (64,), "h": (48,), "fov": (90.0,)}),
+        Target("Placement.at", p.Placement.at, {"m": (7,), "d": (1.0,), "b": (0.0,), "t": (0.0,)}),
+    ]  # fmt: skip
+
+
+def experiments_targets(w: dict[str, Any]) -> list[Target]:
+    import swarmtag.experiments as x
+
+    e = edge_world()
+    study, folder = e["study"], e["folder"]
+    scale = study.scales[0]
+    return [
+        Target("kpi_log", x.kpi_log, {"log": (w["log"],), "scale": (scale,)}),
+        Target("load_study", x.load_study, {"name": ("controller-selection",)}),
+        Target("plan_chunks", x.plan_chunks, {"study": (study,), "store": (e["store"],), "quick": (True,)}, frozenset({"quick"})),
+        Target("read_study_file", x.read_study_file, {"path": (x.study_path("scalability"),)}),
+        Target("seed_folder", x.seed_folder, {"out": (folder,), "offset": (0, 3)}),
+        Target("seeded_study", x.seeded_study, {"study": (study,), "offset": (0, 3)}),
+        Target("split_runs", x.split_runs, {"runs": ([0, 1, 2, 5],), "size": (1, 2)}),
+        Target("study_key", x.study_key, {"study": (study,), "scale": (scale.key,)}),
+        Target("study_path", x.study_path, {"name": ("scalability",)}),
+        Target("Study.from_mapping", x.Study.from_mapping, {"data": ({"name": "x"},)}),
+    ]  # fmt: skip
+
+
 SKIPPED = {
     "swarmtag.calibration.calibrate": "runs simulations for each point; refusals: test_calibrate",
     "swarmtag.calibration.fit_table": "takes a finished calibration only (type checked)",
@@ -355,6 +504,11 @@ SKIPPED = {
     "swarmtag.policy.load_rule": "imports Python files; tests/policy/test_rules.py",
     "swarmtag.policy.register_rule": "changes the process's registry; tests/policy",
     "swarmtag.robot.check_controller": "is swarmtag.sim.check_controller (tests/sim)",
+    "swarmtag.perception.plot_range_study": "draws a figure (seconds); test_bad_arguments",
+    "swarmtag.perception.run_range_study": "fuzzed as few_samples: at most 3 images per cell",
+    "swarmtag.experiments.reproduce": "runs whole studies; tests/experiments/test_bad_arguments.py",
+    "swarmtag.experiments.run_study": "runs a whole study; tests/experiments/test_bad_arguments.py",
+    "swarmtag.experiments.simulate_chunk": "runs simulations; tests/experiments/test_bad_arguments",
 }
 """Public functions not called here, and why."""
 
@@ -363,7 +517,13 @@ SKIPPED = {
 def targets() -> tuple[Target, ...]:
     w = world()
     return tuple(
-        analysis_targets(w) + calibration_targets(w) + policy_targets(w) + robot_targets(w)
+        analysis_targets(w)
+        + calibration_targets(w)
+        + policy_targets(w)
+        + robot_targets(w)
+        + io_targets(w)
+        + perception_targets(w)
+        + experiments_targets(w)
     )
 
 
@@ -466,9 +626,10 @@ def test_every_public_function_is_fuzzed_or_skipped_with_a_reason():
     assert not set(SKIPPED) & fuzzed
 
 
-def test_public_api_fuzz():
-    rng = np.random.default_rng(SEED)
+def test_public_api_fuzz(tmp_path, monkeypatch):
     chosen = targets()
+    monkeypatch.chdir(tmp_path)  # a hostile path such as "x" is written here, not in the tree
+    rng = np.random.default_rng(SEED)
     counts: Counter[str] = Counter()
     started = time.perf_counter()
     for _ in range(CALLS):

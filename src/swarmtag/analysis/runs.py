@@ -12,7 +12,7 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag._checks import check_instance
+from swarmtag._checks import check_instance, check_text
 from swarmtag.errors import StatisticsError
 from swarmtag.io.tables import CarrierLog
 
@@ -61,6 +61,8 @@ class ConditionRuns:
     @classmethod
     def from_log(cls, log: CarrierLog, condition: str) -> ConditionRuns:
         """The rows of ``condition`` in ``log``; an error if there are none."""
+        check_instance("log", log, CarrierLog, error=StatisticsError)
+        check_text("condition", condition, error=StatisticsError)
         rows = np.flatnonzero(log.condition == condition)
         if rows.size == 0:
             raise StatisticsError(

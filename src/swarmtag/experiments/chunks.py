@@ -9,7 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from numbers import Integral
 
+from swarmtag._checks import check_instance, check_int, check_sequence, show
+from swarmtag.errors import StudyError
 from swarmtag.experiments.store import RunKey
 from swarmtag.io import CarrierLog, EventTable
 from swarmtag.policy import load_rule, parse_policy
@@ -44,6 +47,7 @@ class ChunkJob:
 
 def simulate_chunk(job: ChunkJob) -> ChunkResult:
     """Simulate one chunk; a pure function of the job (run in worker processes)."""
+    check_instance("job", job, ChunkJob, error=StudyError)
     for spec in job.rules:  # a spawned worker has not loaded the study's rule files
         load_rule(spec)
     result = simulate(
@@ -64,6 +68,16 @@ def split_runs(runs: Sequence[int], size: int) -> Iterator[tuple[int, int]]:
     >>> list(split_runs([0, 1, 2, 3, 4, 7, 8], 2))
     [(0, 2), (2, 2), (4, 1), (7, 2)]
     """
+    items = check_sequence("runs", runs, error=StudyError)
+    for run in items:
+        if isinstance(run, bool) or not isinstance(run, Integral) or run < 0:
+            msg = f"runs: {show(run)} is not a run index (an integer >= 0)"
+            raise StudyError(msg)
+    size = check_int("size", size, low=1, error=StudyError)
+    return _spans([int(run) for run in items], size)
+
+
+def _spans(runs: Sequence[int], size: int) -> Iterator[tuple[int, int]]:
     start = 0
     while start < len(runs):
         end = start + 1

@@ -15,6 +15,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Final
 
+from swarmtag._checks import check_path, check_text
 from swarmtag._inputs import is_regular_file
 from swarmtag.errors import StudyError
 from swarmtag.experiments.spec import Study, read_study_file
@@ -50,6 +51,7 @@ the allocators study (docs/allocators.md), which compares other rules.
 
 def study_path(name: str) -> Path:
     """The file of the shipped study ``name``; ``StudyError`` listing the names otherwise."""
+    name = check_text("name", name, error=StudyError)
     if name not in STUDIES:
         msg = f"study {name!r}: no such shipped study (shipped: {', '.join(STUDIES)})"
         raise StudyError(msg)
@@ -63,7 +65,7 @@ def load_study(name_or_path: str | os.PathLike[str]) -> Study:
     A string that names an existing file, or ends in ``.toml``, is read as a
     path; any other string must be a shipped study's name.
     """
-    text = os.fspath(name_or_path)
+    text = check_path("name_or_path", name_or_path, error=StudyError)
     if isinstance(name_or_path, os.PathLike) or text.endswith(".toml") or is_regular_file(text):
         return read_study_file(text)
     return read_study_file(study_path(text))

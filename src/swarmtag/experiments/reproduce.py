@@ -31,13 +31,20 @@ from pathlib import Path
 from typing import Final
 
 from swarmtag._atomic import atomic_write_bytes
-from swarmtag._checks import MAX_SEED, check_int
+from swarmtag._checks import MAX_SEED, check_instance, check_int, check_sequence, show
+from swarmtag._checks import check_path as check_path_value
 from swarmtag._inputs import check_path
 from swarmtag.errors import StudyError
 from swarmtag.experiments.directions import DIRECTIONS, Direction
 from swarmtag.experiments.report import StudyRecord, write_report, write_run_record
 from swarmtag.experiments.robustness import ClaimSummary, Outcome, judge_study, robustness
-from swarmtag.experiments.runner import STORE_NAME, StudyResult, check_study_memory, run_study
+from swarmtag.experiments.runner import (
+    STORE_NAME,
+    StudyResult,
+    check_run_options,
+    check_study_memory,
+    run_study,
+)
 from swarmtag.experiments.seed_tables import (
     robustness_json,
     robustness_markdown,
@@ -67,11 +74,15 @@ SEEDS_MARKDOWN: Final = "seeds.md"
 
 def seeded_study(study: Study, offset: int) -> Study:
     """``study`` at master seed ``study.seed + offset``: the seed rule of ``reproduce``."""
+    check_instance("study", study, Study, error=StudyError)
+    offset = check_int("offset", offset, low=0, high=MAX_SEED - study.seed, error=StudyError)
     return dataclasses.replace(study, seed=study.seed + offset)
 
 
 def seed_folder(out_dir: str | os.PathLike[str], offset: int) -> Path:
     """Where the outputs of seed offset ``offset`` go: ``out_dir`` itself for 0."""
+    out_dir = check_path_value("out_dir", out_dir, error=StudyError)
+    offset = check_int("offset", offset, low=0, high=MAX_SEED, error=StudyError)
     return Path(out_dir) if offset == 0 else Path(out_dir) / f"seed+{offset}"
 
 
@@ -197,6 +208,20 @@ def reproduce(
     Everything that can be refused (``seeds``, a seed past the largest,
     memory) is refused before the first run.
     """
+    studies = check_sequence("studies", studies, error=StudyError)
+    for study in studies:
+        check_instance("studies", study, Study, error=StudyError)
+    directions = check_sequence("directions", directions, error=StudyError)
+    for direction in directions:
+        check_instance("directions", direction, Direction, error=StudyError)
+    hook: object = on_study  # checked at run time: a library entry point
+    if hook is not None and not callable(hook):
+        msg = f"on_study: {show(hook)} is not callable"
+        raise StudyError(msg)
+    check_run_options(
+        quick=quick, workers=workers, scheduler=scheduler, progress=progress, backend=backend
+    )
+    out_dir = check_path_value("out_dir", out_dir, error=StudyError)
     folder = check_path(out_dir, what="--out", error=StudyError)
     check_seeds(studies, seeds, quick=quick)
     store = folder / STORE_NAME

@@ -36,6 +36,15 @@ from typing import Any, Final, Self
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._checks import (
+    MAX_WORKERS,
+    check_bool,
+    check_instance,
+    check_int,
+    check_text,
+    show,
+)
+from swarmtag._checks import check_path as check_path_value
 from swarmtag._inputs import check_path
 from swarmtag._resources import check_memory
 from swarmtag.analysis import MetricsReport, summarize, trim_warmup
@@ -76,6 +85,8 @@ def kpi_log(log: CarrierLog, scale: Scale) -> CarrierLog:
     (``swarmtag.analysis.window``); other scales keep every row. A warm-up
     that leaves a run without orders is a ``StudyError`` naming the scale.
     """
+    check_instance("log", log, CarrierLog, error=StudyError)
+    check_instance("scale", scale, Scale, error=StudyError)
     try:
         return trim_warmup(log, scale.kpi_warmup(log.time_unit))
     except StatisticsError as error:
@@ -85,6 +96,8 @@ def kpi_log(log: CarrierLog, scale: Scale) -> CarrierLog:
 
 def study_key(study: Study, scale: str) -> RunKey:
     """The store key of one scale of ``study``."""
+    check_instance("study", study, Study, error=StudyError)
+    check_text("scale", scale, error=StudyError)
     return RunKey(
         study=study.name,
         scale=scale,
@@ -106,6 +119,13 @@ def plan_chunks(
 
     ``backend`` and ``threads`` go with every chunk (``swarmtag.sim.simulate``).
     """
+    check_instance("study", study, Study, error=StudyError)
+    check_instance("store", store, ResultsStore, error=StudyError)
+    check_bool("quick", quick, error=StudyError)
+    if backend is not None:
+        check_text("backend", backend, error=StudyError)
+    if threads is not None:
+        check_int("threads", threads, low=1, high=MAX_WORKERS, error=StudyError)
     total = study.run_count(quick=quick)
     jobs: list[ChunkJob] = []
     for scale in study.scales:
@@ -258,6 +278,28 @@ def _by_kernel(jobs: Sequence[ChunkJob]) -> tuple[list[ChunkJob], list[ChunkJob]
     return compiled, python
 
 
+def check_run_options(
+    *,
+    quick: object,
+    workers: object,
+    scheduler: object,
+    progress: object,
+    backend: object,
+) -> None:
+    """The options ``run_study`` and ``reproduce`` share, checked at their entry."""
+    check_bool("quick", quick, error=StudyError)
+    check_bool("progress", progress, error=StudyError)
+    if workers is not None:
+        count = check_int("workers", workers, low=1, error=StudyError)
+        if count > MAX_WORKERS:
+            msg = f"workers: {show(workers)} is above the most allowed, {MAX_WORKERS}"
+            raise StudyError(msg)
+    if scheduler is not None:
+        check_text("scheduler", scheduler, error=StudyError)
+    if backend is not None:
+        check_text("backend", backend, error=StudyError)
+
+
 def _execution(
     study: Study, backend: str | None, scheduler: str | None, workers: int | None
 ) -> tuple[str | None, int | None]:
@@ -322,6 +364,13 @@ def run_study(
     of their own.
     Returns where everything went; writes ``metrics.json`` per scale.
     """
+    check_instance("study", study, Study, error=StudyError)
+    check_run_options(
+        quick=quick, workers=workers, scheduler=scheduler, progress=progress, backend=backend
+    )
+    check_path_value("out_dir", out_dir, error=StudyError)
+    if store is not None:
+        check_path_value("store", store, error=StudyError)
     if workers is not None and scheduler is not None:
         raise StudyError("workers: a Dask cluster has its own workers; give workers or scheduler")
     if workers is not None and workers < 1:

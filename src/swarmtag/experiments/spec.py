@@ -51,7 +51,16 @@ from pathlib import Path
 from typing import Any, Final
 
 from swarmtag import __version__
-from swarmtag._checks import MAX_RESAMPLES, MAX_RUN_INDEX, MAX_SEED, check_int
+from swarmtag._checks import (
+    MAX_RESAMPLES,
+    MAX_RUN_INDEX,
+    MAX_SEED,
+    check_instance,
+    check_int,
+    check_path,
+    check_text,
+    show,
+)
 from swarmtag._sources import PACKAGE_ROOT, imported_sources
 from swarmtag._toml import read_toml
 from swarmtag.errors import ConfigError, PolicyError, StudyError
@@ -290,6 +299,14 @@ class Study:
         ``policy_files`` are read relative to ``base`` (the study file's
         folder; default: the working directory).
         """
+        given: object = data  # checked at run time: a library entry point
+        if not isinstance(given, Mapping):
+            msg = f"data: {show(given)} is not a mapping (a TOML table)"
+            raise StudyError(msg)
+        if source is not None:
+            source = check_text("source", source, error=StudyError)
+        if base is not None:
+            base = check_instance("base", base, Path, error=StudyError)
         try:
             return cls._parse(data, source, base)
         except (StudyError, ConfigError) as error:
@@ -488,5 +505,6 @@ def _scales(
 
 def read_study_file(path: str | os.PathLike[str]) -> Study:
     """Read and validate a study TOML file; every refusal is a ``StudyError`` naming the file."""
+    path = check_path("path", path, error=StudyError)
     data = read_toml(path, what="study file", error=StudyError)
     return Study.from_mapping(data, source=Path(path).name, base=Path(path).parent)

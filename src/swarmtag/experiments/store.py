@@ -37,6 +37,7 @@ from typing import Any, Final, Self
 import numpy as np
 
 from swarmtag._atomic import write_failure_in_text
+from swarmtag._checks import check_bool, check_path
 from swarmtag.errors import StoreError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 
@@ -142,8 +143,10 @@ class ResultsStore:
     """
 
     def __init__(self, path: str | os.PathLike[str], *, read_only: bool = False) -> None:
+        checked = check_path("path", path, error=StoreError)
+        check_bool("read_only", read_only, error=StoreError)
         duckdb = _duckdb()
-        self.path = Path(path)
+        self.path = Path(checked)
         if read_only and not self.path.is_file():
             msg = f"{self.path}: no results store there"
             raise StoreError(msg)

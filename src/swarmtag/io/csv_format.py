@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag._atomic import atomic_write_bytes
+from swarmtag._checks import check_path, check_text
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
     MISSING_ID,
@@ -40,7 +41,7 @@ from swarmtag.io.schema import (
     finish_text,
     shown,
 )
-from swarmtag.io.tables import CarrierLog, EventTable, _Columns
+from swarmtag.io.tables import CarrierLog, EventTable, _Columns, check_table
 from swarmtag.io.validation import (
     check_no_nul,
     input_file,
@@ -208,23 +209,33 @@ def parse_carrier_csv(text: str, *, source: str | None = None) -> CarrierLog:
     ...
     swarmtag.errors.EventLogError: events.csv: line 2, column delivery_time: 'abc' is not a number
     """
+    text, source = _check_text_source(text, source)
     with reading(source):
         return _parse_table(text.removeprefix("\ufeff"), CarrierLog, source)
 
 
 def parse_event_csv(text: str, *, source: str | None = None) -> EventTable:
     """Read a long-format event table from CSV text; ``source`` names it in messages."""
+    text, source = _check_text_source(text, source)
     with reading(source):
         return _parse_table(text.removeprefix("\ufeff"), EventTable, source)
 
 
+def _check_text_source(text: object, source: object) -> tuple[str, str | None]:
+    """The public parsers' arguments, checked at the entry."""
+    checked = check_text("text", text, error=EventLogError)
+    return checked, None if source is None else check_text("source", source, error=EventLogError)
+
+
 def read_carrier_csv(path: str | os.PathLike[str]) -> CarrierLog:
     """Read a per-carrier event log from a CSV file."""
+    path = check_path("path", path, error=EventLogError)
     return parse_carrier_csv(_read_text(path, "CSV event log"), source=os.fspath(path))
 
 
 def read_event_csv(path: str | os.PathLike[str]) -> EventTable:
     """Read a long-format event table from a CSV file."""
+    path = check_path("path", path, error=EventLogError)
     return parse_event_csv(_read_text(path, "CSV event table"), source=os.fspath(path))
 
 
@@ -256,6 +267,7 @@ def format_csv(table: CarrierLog | EventTable) -> str:
     condition,run,seed,carrier,urgency0,order_time,pickup_time,delivery_time,robot
     proximity,0,0,4,7,-3.5,10.0,25.5,1
     """
+    check_table("table", table)
     buffer = io.StringIO(newline="")
     writer = csv.writer(buffer, lineterminator="\n")
     header, rows = _format_rows(table)
@@ -266,6 +278,8 @@ def format_csv(table: CarrierLog | EventTable) -> str:
 
 def write_csv(table: CarrierLog | EventTable, path: str | os.PathLike[str]) -> None:
     """Write a table as canonical CSV (UTF-8, LF line endings)."""
+    check_table("table", table)
+    path = check_path("path", path, error=EventLogError)
     data = format_csv(table).encode("utf-8")
     try:
         atomic_write_bytes(path, data)

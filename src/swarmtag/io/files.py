@@ -6,10 +6,11 @@ import os
 from pathlib import Path
 from typing import Final
 
+from swarmtag._checks import check_path
 from swarmtag.errors import EventLogError
 from swarmtag.io.csv_format import read_carrier_csv, read_event_csv, write_csv
 from swarmtag.io.parquet_format import read_carrier_parquet, read_event_parquet, write_parquet
-from swarmtag.io.tables import CarrierLog, EventTable
+from swarmtag.io.tables import CarrierLog, EventTable, check_table
 
 __all__ = ["read_event_log", "read_event_table", "write_event_log", "write_event_table"]
 
@@ -18,6 +19,7 @@ _PARQUET: Final = frozenset({".parquet", ".pq"})
 
 
 def _format(path: str | os.PathLike[str]) -> str:
+    path = check_path("path", path, error=EventLogError)
     suffix = Path(path).suffix.lower()
     if suffix in _CSV:
         return "csv"
@@ -38,6 +40,7 @@ def read_event_log(path: str | os.PathLike[str]) -> CarrierLog:
 
 def write_event_log(log: CarrierLog, path: str | os.PathLike[str]) -> None:
     """Write a per-carrier event log to a ``.csv`` or ``.parquet`` file."""
+    check_table("log", log, (CarrierLog,))
     if _format(path) == "csv":
         write_csv(log, path)
     else:
@@ -53,6 +56,7 @@ def read_event_table(path: str | os.PathLike[str]) -> EventTable:
 
 def write_event_table(table: EventTable, path: str | os.PathLike[str]) -> None:
     """Write a long-format event table to a ``.csv`` or ``.parquet`` file."""
+    check_table("table", table, (EventTable,))
     if _format(path) == "csv":
         write_csv(table, path)
     else:

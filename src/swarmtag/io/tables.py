@@ -16,6 +16,7 @@ from typing import ClassVar, Self
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from swarmtag._checks import check_sequence, show
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
     CARRIER_OPTIONAL,
@@ -107,6 +108,11 @@ class _Columns:
     @classmethod
     def concat(cls, tables: Sequence[Self]) -> Self:
         """The rows of ``tables`` one after the other; all must share one time unit."""
+        tables = check_sequence("tables", tables, error=EventLogError)
+        for table in tables:
+            if not isinstance(table, cls):
+                msg = f"tables: {show(table)} is not a {cls.__name__}"
+                raise EventLogError(msg)
         if not tables:
             raise EventLogError(f"cannot concatenate an empty list of {cls.__name__} tables")
         units = {table.time_unit for table in tables}
@@ -405,3 +411,13 @@ class EventTable(_Columns):
             "value": value,
         }
         self._set_columns(columns, time_unit, RowLocator())
+
+
+def check_table(
+    name: str, value: object, kinds: tuple[type, ...] = (CarrierLog, EventTable)
+) -> None:
+    """An ``EventLogError`` naming ``name`` unless ``value`` is one of ``kinds`` (entry check)."""
+    if not isinstance(value, kinds):
+        allowed = " or ".join(kind.__name__ for kind in kinds)
+        msg = f"{name}: {show(value)} is not a {allowed}"
+        raise EventLogError(msg)

@@ -34,7 +34,15 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag._checks import check_choice, check_int, check_number, show
+from swarmtag._checks import (
+    check_choice,
+    check_instance,
+    check_int,
+    check_number,
+    check_path,
+    check_text,
+    show,
+)
 from swarmtag._inputs import is_regular_file
 from swarmtag._toml import read_toml
 from swarmtag.errors import PerceptionError
@@ -133,6 +141,8 @@ class Intrinsics:
         >>> round(Intrinsics.from_fov(1920, 1080, 90.0).fx, 3)
         960.0
         """
+        width = check_int("width", width, low=16, high=MAX_PIXELS, error=PerceptionError)
+        height = check_int("height", height, low=16, high=MAX_PIXELS, error=PerceptionError)
         fov = _number("horizontal_fov", horizontal_fov, low=1.0, high=179.0)
         focal = (width / 2) / math.tan(math.radians(fov) / 2)
         return cls(width, height, focal, focal, (width - 1) / 2, (height - 1) / 2, distortion)
@@ -435,6 +445,12 @@ def _camera(table: Mapping[str, Any], index: int, shared: Intrinsics | None) -> 
 
 def rig_from_mapping(data: Mapping[str, Any], *, source: str | None = None) -> Rig:
     """A rig from its TOML layout (docs/perception.md); errors name ``source`` and the key."""
+    if source is not None:
+        source = check_text("source", source, error=PerceptionError)
+    given: object = data  # checked at run time: a library entry point
+    if not isinstance(given, Mapping):
+        msg = f"data: {show(given)} is not a mapping (a TOML table)"
+        raise PerceptionError(msg)
     prefix = f"{source}: " if source else ""
     try:
         _known(data, _TOP, "rig")
@@ -474,6 +490,7 @@ def rig_from_mapping(data: Mapping[str, Any], *, source: str | None = None) -> R
 
 def rig_path(name: str) -> Path:
     """The file of the shipped rig ``name``; ``PerceptionError`` listing the names otherwise."""
+    name = check_text("name", name, error=PerceptionError)
     if name not in RIGS:
         msg = f"camera {name!r}: no such file or shipped rig (shipped: {', '.join(RIGS)})"
         raise PerceptionError(msg)
@@ -482,13 +499,24 @@ def rig_path(name: str) -> Path:
 
 def read_rig_file(path: str | os.PathLike[str]) -> Rig:
     """Read and check a rig TOML file; every refusal is a ``PerceptionError`` naming it."""
+    path = check_path("path", path, error=PerceptionError)
     data = read_toml(path, what="camera file", error=PerceptionError)
     return rig_from_mapping(data, source=os.fspath(path))
 
 
 def load_rig(name_or_path: str | os.PathLike[str] = DEFAULT_RIG) -> Rig:
     """A shipped rig by name (``"dots-like"``) or a rig file by path (``"robot.toml"``)."""
-    text = os.fspath(name_or_path)
+    text = check_path("name_or_path", name_or_path, error=PerceptionError)
     if isinstance(name_or_path, os.PathLike) or text.endswith(".toml") or is_regular_file(text):
         return read_rig_file(text)
     return read_rig_file(rig_path(text))
+
+
+def check_camera(value: object) -> Camera:
+    """``value`` if it is a ``Camera``, else a ``PerceptionError`` naming ``camera``."""
+    return check_instance("camera", value, Camera, error=PerceptionError)
+
+
+def check_carrier(value: object) -> CarrierMarkers:
+    """``value`` if it is a ``CarrierMarkers``, else a ``PerceptionError`` naming ``carrier``."""
+    return check_instance("carrier", value, CarrierMarkers, error=PerceptionError)

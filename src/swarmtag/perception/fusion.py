@@ -47,10 +47,10 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag._checks import check_number
+from swarmtag._checks import check_int, check_number
 from swarmtag.errors import PerceptionError
-from swarmtag.perception.camera import CarrierMarkers
-from swarmtag.perception.markers import Face, MarkerDetection
+from swarmtag.perception.camera import CarrierMarkers, check_carrier
+from swarmtag.perception.markers import MARKER_IDS, Face, MarkerDetection, detection_items
 
 __all__ = [
     "CENTRED_TOLERANCE",
@@ -156,10 +156,11 @@ def fuse(
     taken on the world's axes. Markers of an underside map are left out: they name
     no carrier (``centring_offset`` reads them).
     """
+    check_carrier(carrier)
     if heading is not None:
         heading = check_number("heading", heading, low=-1e4, high=1e4, error=PerceptionError)
     groups: dict[int, list[MarkerDetection]] = {}
-    for item in detections:
+    for item in detection_items("detections", detections):
         detection: object = item  # checked at run time: a library entry point
         if not isinstance(detection, MarkerDetection):
             msg = f"fuse: expected MarkerDetection items, got {type(detection).__name__}"
@@ -261,8 +262,10 @@ def centring_offset(
     on carriers without a map, the largest marker in view is used. Detections from
     other cameras are refused: only the upward camera looks at an underside.
     """
+    if marker is not None:
+        marker = check_int("marker", marker, low=0, high=MARKER_IDS - 1, error=PerceptionError)
     chosen = []
-    for item in detections:
+    for item in detection_items("detections", detections):
         detection: object = item  # checked at run time: a library entry point
         if not isinstance(detection, MarkerDetection):
             msg = f"centring_offset: expected MarkerDetection items, got {type(detection).__name__}"

@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any, Final
@@ -40,10 +41,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag import _interrupt
+from swarmtag._checks import show
 from swarmtag.errors import PerceptionError
 from swarmtag.perception._bits import read_candidate
 from swarmtag.perception._opencv import opencv
-from swarmtag.perception.camera import Camera, CarrierMarkers
+from swarmtag.perception.camera import Camera, CarrierMarkers, check_camera, check_carrier
 
 __all__ = [
     "DICTIONARY",
@@ -129,6 +131,7 @@ def marker_frames(carrier: CarrierMarkers) -> tuple[MarkerFrame, ...]:
     >>> [frame.face.name for frame in marker_frames(CarrierMarkers())][:2]
     ['EAST', 'NORTH']
     """
+    check_carrier(carrier)
     up = np.array([0.0, 0.0, 1.0])
     frames = []
     for face in (Face.EAST, Face.NORTH, Face.WEST, Face.SOUTH):
@@ -311,6 +314,7 @@ def to_gray(image: object, camera: Camera) -> NDArray[np.uint8]:
 
     Accepts (H, W) grey or (H, W, 3) BGR arrays of dtype uint8.
     """
+    check_camera(camera)
     if not isinstance(image, np.ndarray) or image.dtype != np.uint8:
         kind = image.dtype if isinstance(image, np.ndarray) else type(image).__name__
         msg = f"image: expected an 8-bit (uint8) numpy array, got {kind}"
@@ -467,6 +471,8 @@ def detect_markers(
     is missing. The search runs in a helper thread (``_interrupt.in_thread``), so that
     Ctrl-C ends it at once even on a large image.
     """
+    check_camera(camera)
+    check_carrier(carrier)
     opencv()  # refuses in one line when the extra is missing (the detector may be cached)
     gray = to_gray(image, camera)
     mount = camera.mount
@@ -499,3 +505,11 @@ def detect_markers(
             )
         )
     return tuple(sorted(found, key=lambda d: (d.marker, d.corners[0, 0], d.corners[0, 1])))
+
+
+def detection_items(name: str, detections: object) -> Iterable[object]:
+    """``detections`` if it can be iterated (a list, tuple, generator), else ``PerceptionError``."""
+    if isinstance(detections, str | bytes | Mapping) or not isinstance(detections, Iterable):
+        msg = f"{name}: {show(detections)} is not a list of MarkerDetection"
+        raise PerceptionError(msg)
+    return detections

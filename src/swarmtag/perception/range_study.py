@@ -33,7 +33,15 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag._checks import check_int, check_number
+from swarmtag._checks import (
+    check_instance,
+    check_int,
+    check_number,
+    check_path,
+    check_sequence,
+    check_text,
+    show,
+)
 from swarmtag._interrupt import checkpoint
 from swarmtag._plotting import pyplot
 from swarmtag.errors import PerceptionError
@@ -253,6 +261,7 @@ class RangeStudy:
 
 
 def _grid(name: str, values: Sequence[float], low: float, high: float) -> Float:
+    values = check_sequence(name, values, error=PerceptionError)
     array = np.array(
         [check_number(name, v, low=low, high=high, error=PerceptionError) for v in values]
     )
@@ -290,6 +299,12 @@ def run_range_study(
 
     ``progress(done, total)`` is called after each cell.
     """
+    check_instance("rig", rig, Rig, error=PerceptionError)
+    check_instance("nuisance", nuisance, Nuisance, error=PerceptionError)
+    hook: object = progress  # checked at run time: a library entry point
+    if hook is not None and not callable(hook):
+        msg = f"progress: {show(hook)} is not callable"
+        raise PerceptionError(msg)
     grid_d = _grid("distances", distances, 0.0, 100.0)
     grid_b = _grid("bearings", bearings, -180.0, 180.0)
     count = check_int("samples", samples, low=1, high=MAX_SAMPLES, error=PerceptionError)
@@ -323,6 +338,18 @@ def run_range_study(
     return RangeStudy(rig.name, grid_d, grid_b, detected, error, wrong, seed, nuisance)
 
 
+def _check_marks(marks: object) -> tuple[tuple[float, str], ...]:
+    """``plot_range_study``'s marks: (distance, label) pairs, checked at the entry."""
+    checked = []
+    for mark in check_sequence("marks", marks, error=PerceptionError):
+        if not isinstance(mark, tuple | list) or len(mark) != 2:
+            msg = f"marks: {show(mark)} is not a (distance, label) pair"
+            raise PerceptionError(msg)
+        distance = check_number("marks", mark[0], low=0.0, high=1e3, error=PerceptionError)
+        checked.append((distance, check_text("marks", mark[1], error=PerceptionError)))
+    return tuple(checked)
+
+
 def plot_range_study(
     study: RangeStudy,
     path: str | Path,
@@ -336,6 +363,9 @@ def plot_range_study(
     """
     from swarmtag._atomic import atomic_write_bytes  # noqa: PLC0415 - only when saving
 
+    check_instance("study", study, RangeStudy, error=PerceptionError)
+    path = check_path("path", path, error=PerceptionError)
+    marks = _check_marks(marks)
     plt = pyplot()
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True)
     errors = study.error_quantile() * 100

@@ -30,10 +30,16 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag._checks import check_int, check_number
+from swarmtag._checks import check_instance, check_int, check_number, check_sequence
 from swarmtag.errors import PerceptionError
 from swarmtag.perception._opencv import opencv
-from swarmtag.perception.camera import Camera, CarrierMarkers, Intrinsics
+from swarmtag.perception.camera import (
+    Camera,
+    CarrierMarkers,
+    Intrinsics,
+    check_camera,
+    check_carrier,
+)
 from swarmtag.perception.markers import MARKER_IDS, Face, MarkerFrame, marker_frames
 
 __all__ = ["Conditions", "Placement", "render", "visible_markers"]
@@ -388,6 +394,8 @@ def visible_markers(
     Nearer carriers are not tested as occluders: this is what the camera could see.
     An underside map counts as seen (under the carrier's id) when one of its markers is.
     """
+    placements = _check_scene(camera, carrier, placements)
+    margin = check_number("margin", margin, low=0.0, high=1e4, error=PerceptionError)
     _check_ids(carrier, placements)
     cv2 = opencv()
     lens = camera.intrinsics
@@ -410,6 +418,16 @@ def visible_markers(
                 seen.append((placement.marker, frame.face))
                 break
     return tuple(seen)
+
+
+def _check_scene(camera: object, carrier: object, placements: object) -> tuple[Placement, ...]:
+    """The public entries' camera, carrier and placements, checked; the placements as a tuple."""
+    check_camera(camera)
+    check_carrier(carrier)
+    items = check_sequence("placements", placements, error=PerceptionError)
+    for item in items:
+        check_instance("placements", item, Placement, error=PerceptionError)
+    return tuple(items)
 
 
 def _check_ids(carrier: CarrierMarkers, placements: Sequence[Placement]) -> None:
@@ -438,6 +456,8 @@ def render(
     if not isinstance(source, np.random.Generator):
         msg = f"rng: expected a numpy.random.Generator, got {type(source).__name__}"
         raise PerceptionError(msg)
+    placements = _check_scene(camera, carrier, placements)
+    check_instance("conditions", conditions, Conditions, error=PerceptionError)
     _check_ids(carrier, placements)
     lens = camera.intrinsics
     if lens.distorted:

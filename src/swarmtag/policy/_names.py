@@ -11,6 +11,7 @@ import re
 from collections.abc import Callable
 from typing import Final
 
+from swarmtag._checks import show
 from swarmtag.errors import PolicyError
 from swarmtag.policy._allocators import Adaptive, Cbaa, ClaimFirst, Oracle, Threshold
 from swarmtag.policy._catalogue import accepted_forms, rule_info
@@ -58,7 +59,7 @@ def parse_policy(name: str) -> Policy:
     """
     checked: object = name  # names also come from files and scripts, outside the type checker
     if not isinstance(checked, str):
-        msg = f"condition name: {checked!r} is not a string; {_ACCEPTED}"
+        msg = f"condition name: {show(checked)} is not a string; {_ACCEPTED}"
         raise PolicyError(msg)
     match = _NAME.fullmatch(checked)
     if match is None:

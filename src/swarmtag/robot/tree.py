@@ -166,6 +166,8 @@ def dot_picture(
     folder = Path(check_path("folder", folder))
     if not check_text("name", name) or "/" in name or "\0" in name or name in (".", ".."):
         raise ConfigError(f"name: {show(name)} is not a plain file name")
+    if not folder.is_dir():
+        raise ConfigError(f"folder: {show(str(folder))} is not an existing folder")
     graph = py_trees.display.dot_tree(tree.root)
     written = [folder / f"{name}.dot"]
     graph.write(str(written[0]), format="raw")
