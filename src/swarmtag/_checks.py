@@ -33,7 +33,7 @@ __all__ = [
     "check_instance",
     "check_int",
     "check_number",
-    "check_path",
+    "check_path_value",
     "check_probability",
     "check_sequence",
     "check_text",
@@ -277,10 +277,10 @@ def check_array(
     return array.astype(np.int64)
 
 
-def check_path(name: str, value: object, *, error: type[SwarmtagError] = ConfigError) -> str:
+def check_path_value(name: str, value: object, *, error: type[SwarmtagError] = ConfigError) -> str:
     """``value`` as a path string if it is a ``str`` or ``os.PathLike`` naming something.
 
-    >>> check_path("baseline", 3)
+    >>> check_path_value("baseline", 3)
     Traceback (most recent call last):
     ...
     swarmtag.errors.ConfigError: baseline: 3 is not a path

@@ -16,7 +16,7 @@ from typing import Final
 
 import numpy as np
 
-from swarmtag._checks import check_instance, check_path, check_text
+from swarmtag._checks import check_instance, check_path_value, check_text
 from swarmtag._inputs import is_regular_file
 from swarmtag.analysis import CORE_METRICS, ConditionRuns, summarize
 from swarmtag.calibration.registry import target_path
@@ -134,7 +134,7 @@ def load_baseline(text: str, *, condition: str | None = None) -> Targets:
 
     ``condition`` picks an event log's condition; a target file names its own.
     """
-    text = check_path("--baseline", text, error=CalibrationError)
+    text = check_path_value("--baseline", text, error=CalibrationError)
     if condition is not None:
         check_text("--condition", condition, error=CalibrationError)
     path = Path(text)

@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import IO, Any, Final, NoReturn
 
 from swarmtag._atomic import write_failure
-from swarmtag._checks import check_path, show
+from swarmtag._checks import check_path_value, show
 from swarmtag.calibration.objective import Achieved
 from swarmtag.errors import CalibrationError
 
@@ -81,7 +81,7 @@ def default_cache_path(out: Path) -> Path:
     >>> default_cache_path(Path("out/lab.toml")).as_posix()
     'out/lab.cache.jsonl'
     """
-    path = Path(check_path("out", out, error=CalibrationError))
+    path = Path(check_path_value("out", out, error=CalibrationError))
     if not path.stem or path.name in (".", ".."):
         raise CalibrationError(f"out: {show(str(out))} names no file to put a cache next to")
     return path.with_name(f"{path.stem}.cache.jsonl")

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
-from swarmtag._checks import check_path, check_text
+from swarmtag._checks import check_path_value, check_text
 from swarmtag._toml import read_toml
 from swarmtag.analysis import kpis as _kpis
 from swarmtag.errors import CalibrationError, ConfigError, SwarmtagError
@@ -320,7 +320,7 @@ class Targets:
 
 def read_target_file(path: str | os.PathLike[str], *, source: str | None = None) -> Targets:
     """Read and check a target file; ``source`` names it in messages (default: the path)."""
-    check_path("target file", path, error=CalibrationError)
+    check_path_value("target file", path, error=CalibrationError)
     if source is not None:
         check_text("source", source, error=CalibrationError)
     data = read_toml(path, what="target file", error=CalibrationError)

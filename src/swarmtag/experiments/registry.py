@@ -15,7 +15,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Final
 
-from swarmtag._checks import check_path, check_text
+from swarmtag._checks import check_path_value, check_text
 from swarmtag._inputs import is_regular_file
 from swarmtag.errors import StudyError
 from swarmtag.experiments.spec import Study, read_study_file
@@ -65,7 +65,7 @@ def load_study(name_or_path: str | os.PathLike[str]) -> Study:
     A string that names an existing file, or ends in ``.toml``, is read as a
     path; any other string must be a shipped study's name.
     """
-    text = check_path("name_or_path", name_or_path, error=StudyError)
+    text = check_path_value("name_or_path", name_or_path, error=StudyError)
     if isinstance(name_or_path, os.PathLike) or text.endswith(".toml") or is_regular_file(text):
         return read_study_file(text)
     return read_study_file(study_path(text))

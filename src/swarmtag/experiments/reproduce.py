@@ -31,8 +31,14 @@ from pathlib import Path
 from typing import Final
 
 from swarmtag._atomic import atomic_write_bytes
-from swarmtag._checks import MAX_SEED, check_instance, check_int, check_sequence, show
-from swarmtag._checks import check_path as check_path_value
+from swarmtag._checks import (
+    MAX_SEED,
+    check_instance,
+    check_int,
+    check_path_value,
+    check_sequence,
+    show,
+)
 from swarmtag._inputs import check_path
 from swarmtag.errors import StudyError
 from swarmtag.experiments.directions import DIRECTIONS, Direction

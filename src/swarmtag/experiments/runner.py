@@ -41,10 +41,10 @@ from swarmtag._checks import (
     check_bool,
     check_instance,
     check_int,
+    check_path_value,
     check_text,
     show,
 )
-from swarmtag._checks import check_path as check_path_value
 from swarmtag._inputs import check_path
 from swarmtag._resources import check_memory
 from swarmtag.analysis import MetricsReport, summarize, trim_warmup

@@ -57,7 +57,7 @@ from swarmtag._checks import (
     MAX_SEED,
     check_instance,
     check_int,
-    check_path,
+    check_path_value,
     check_text,
     show,
 )
@@ -505,6 +505,6 @@ def _scales(
 
 def read_study_file(path: str | os.PathLike[str]) -> Study:
     """Read and validate a study TOML file; every refusal is a ``StudyError`` naming the file."""
-    path = check_path("path", path, error=StudyError)
+    path = check_path_value("path", path, error=StudyError)
     data = read_toml(path, what="study file", error=StudyError)
     return Study.from_mapping(data, source=Path(path).name, base=Path(path).parent)

@@ -37,7 +37,7 @@ from typing import Any, Final, Self
 import numpy as np
 
 from swarmtag._atomic import write_failure_in_text
-from swarmtag._checks import check_bool, check_path
+from swarmtag._checks import check_bool, check_path_value
 from swarmtag.errors import StoreError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 
@@ -143,7 +143,7 @@ class ResultsStore:
     """
 
     def __init__(self, path: str | os.PathLike[str], *, read_only: bool = False) -> None:
-        checked = check_path("path", path, error=StoreError)
+        checked = check_path_value("path", path, error=StoreError)
         check_bool("read_only", read_only, error=StoreError)
         duckdb = _duckdb()
         self.path = Path(checked)

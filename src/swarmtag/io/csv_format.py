@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag._atomic import atomic_write_bytes
-from swarmtag._checks import check_path, check_text
+from swarmtag._checks import check_path_value, check_text
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
     MISSING_ID,
@@ -229,13 +229,13 @@ def _check_text_source(text: object, source: object) -> tuple[str, str | None]:
 
 def read_carrier_csv(path: str | os.PathLike[str]) -> CarrierLog:
     """Read a per-carrier event log from a CSV file."""
-    path = check_path("path", path, error=EventLogError)
+    path = check_path_value("path", path, error=EventLogError)
     return parse_carrier_csv(_read_text(path, "CSV event log"), source=os.fspath(path))
 
 
 def read_event_csv(path: str | os.PathLike[str]) -> EventTable:
     """Read a long-format event table from a CSV file."""
-    path = check_path("path", path, error=EventLogError)
+    path = check_path_value("path", path, error=EventLogError)
     return parse_event_csv(_read_text(path, "CSV event table"), source=os.fspath(path))
 
 
@@ -279,7 +279,7 @@ def format_csv(table: CarrierLog | EventTable) -> str:
 def write_csv(table: CarrierLog | EventTable, path: str | os.PathLike[str]) -> None:
     """Write a table as canonical CSV (UTF-8, LF line endings)."""
     check_table("table", table)
-    path = check_path("path", path, error=EventLogError)
+    path = check_path_value("path", path, error=EventLogError)
     data = format_csv(table).encode("utf-8")
     try:
         atomic_write_bytes(path, data)

@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 from typing import Final
 
-from swarmtag._checks import check_path
+from swarmtag._checks import check_path_value
 from swarmtag.errors import EventLogError
 from swarmtag.io.csv_format import read_carrier_csv, read_event_csv, write_csv
 from swarmtag.io.parquet_format import read_carrier_parquet, read_event_parquet, write_parquet
@@ -19,7 +19,7 @@ _PARQUET: Final = frozenset({".parquet", ".pq"})
 
 
 def _format(path: str | os.PathLike[str]) -> str:
-    path = check_path("path", path, error=EventLogError)
+    path = check_path_value("path", path, error=EventLogError)
     suffix = Path(path).suffix.lower()
     if suffix in _CSV:
         return "csv"

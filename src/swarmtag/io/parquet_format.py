@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from swarmtag._atomic import atomic_path
-from swarmtag._checks import check_path
+from swarmtag._checks import check_path_value
 from swarmtag.errors import EventLogError
 from swarmtag.io.schema import (
     INT64_MAX,
@@ -109,7 +109,7 @@ def _column(
 
 def _read(path: str | os.PathLike[str], table: type[_TableT], what: str) -> _TableT:
     """Read and check a table; any failure is one ``EventLogError`` line naming the file."""
-    path = check_path("path", path, error=EventLogError)
+    path = check_path_value("path", path, error=EventLogError)
     pa, pq = _pyarrow()
     source = os.fspath(path)
     checked = input_file(path, what)  # a FIFO or a folder is refused before it is opened
@@ -179,7 +179,7 @@ def read_event_parquet(path: str | os.PathLike[str]) -> EventTable:
 def write_parquet(table: CarrierLog | EventTable, path: str | os.PathLike[str]) -> None:
     """Write a table as Parquet with typed columns and nulls for empty cells."""
     check_table("table", table)
-    path = check_path("path", path, error=EventLogError)
+    path = check_path_value("path", path, error=EventLogError)
     pa, pq = _pyarrow()
     arrays: dict[str, Any] = {}
     for spec in table.written_columns():

@@ -39,7 +39,7 @@ from swarmtag._checks import (
     check_instance,
     check_int,
     check_number,
-    check_path,
+    check_path_value,
     check_text,
     show,
 )
@@ -499,14 +499,14 @@ def rig_path(name: str) -> Path:
 
 def read_rig_file(path: str | os.PathLike[str]) -> Rig:
     """Read and check a rig TOML file; every refusal is a ``PerceptionError`` naming it."""
-    path = check_path("path", path, error=PerceptionError)
+    path = check_path_value("path", path, error=PerceptionError)
     data = read_toml(path, what="camera file", error=PerceptionError)
     return rig_from_mapping(data, source=os.fspath(path))
 
 
 def load_rig(name_or_path: str | os.PathLike[str] = DEFAULT_RIG) -> Rig:
     """A shipped rig by name (``"dots-like"``) or a rig file by path (``"robot.toml"``)."""
-    text = check_path("name_or_path", name_or_path, error=PerceptionError)
+    text = check_path_value("name_or_path", name_or_path, error=PerceptionError)
     if isinstance(name_or_path, os.PathLike) or text.endswith(".toml") or is_regular_file(text):
         return read_rig_file(text)
     return read_rig_file(rig_path(text))

@@ -37,7 +37,7 @@ from swarmtag._checks import (
     check_instance,
     check_int,
     check_number,
-    check_path,
+    check_path_value,
     check_sequence,
     check_text,
     show,
@@ -364,7 +364,7 @@ def plot_range_study(
     from swarmtag._atomic import atomic_write_bytes  # noqa: PLC0415 - only when saving
 
     check_instance("study", study, RangeStudy, error=PerceptionError)
-    path = check_path("path", path, error=PerceptionError)
+    path = check_path_value("path", path, error=PerceptionError)
     marks = _check_marks(marks)
     plt = pyplot()
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True)

@@ -34,7 +34,7 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
-from swarmtag._checks import check_instance, check_path, check_text
+from swarmtag._checks import check_instance, check_path_value, check_text
 from swarmtag.errors import PolicyError
 from swarmtag.policy._policies import Policy
 
@@ -244,7 +244,7 @@ def load_rule(spec: str, *, base: Path | None = None) -> ScoreRule:
     """
     check_text("rule file", spec, error=PolicyError)
     if base is not None:
-        base = Path(check_path("base", base, error=PolicyError))
+        base = Path(check_path_value("base", base, error=PolicyError))
     path_text, sep, function_name = spec.rpartition(":")
     if not sep or not path_text or not function_name:
         msg = f"rule file: {spec!r} is not FILE.py:FUNCTION"

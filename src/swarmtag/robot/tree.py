@@ -26,7 +26,7 @@ import numpy as np
 import py_trees
 from py_trees.composites import Selector, Sequence
 
-from swarmtag._checks import check_instance, check_path, check_text, show
+from swarmtag._checks import check_instance, check_path_value, check_text, show
 from swarmtag.errors import ConfigError
 from swarmtag.robot.behaviours import (
     Centre,
@@ -163,7 +163,7 @@ def dot_picture(
     Returns the files written (``folder / name`` with .dot, .png, .svg).
     """
     check_instance("tree", tree, py_trees.trees.BehaviourTree)
-    folder = Path(check_path("folder", folder))
+    folder = Path(check_path_value("folder", folder))
     if not check_text("name", name) or "/" in name or "\0" in name or name in (".", ".."):
         raise ConfigError(f"name: {show(name)} is not a plain file name")
     if not folder.is_dir():
