@@ -14,7 +14,8 @@ DEMO_STAMP := $(VENV)/.installed-demo
 # The fast simulation kernel is compiled once per machine (about 90 s per entry point on
 # one core). It starts in the background as soon as numba is installed, so that it overlaps
 # the rest of the install (and, for make test, ruff and mypy); `demo` and `unit` wait for it.
-# Entry points: batched (every command) and split (one run over threads; the tests).
+# Entry points: batched (every command) and split (one run over threads; the tests); then
+# statistics, the bootstrap's compiled loops (a few seconds, on the core the kernel leaves).
 define install_with_warmup
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
@@ -34,12 +35,12 @@ WAIT_FOR_WARMUP = @if [ -f $(WARMUP_PID) ]; then pid=$$(cat $(WARMUP_PID)); \
 # Upgrading pip itself takes seconds and stays quiet. The demo needs fewer extras than the
 # tests; the test install covers the demo's.
 $(DEMO_STAMP): pyproject.toml
-	$(call install_with_warmup,batched)
+	$(call install_with_warmup,batched statistics)
 	$(BIN)/python -m pip install -e '.[fast,plot,experiments]'
 	touch $@
 
 $(STAMP): pyproject.toml
-	$(call install_with_warmup,batched split)
+	$(call install_with_warmup,batched split statistics)
 	$(BIN)/python -m pip install -e '.[dev]'
 	touch $@ $(DEMO_STAMP)
 

@@ -1,7 +1,8 @@
 """Shared test configuration: Hypothesis profiles, the opt-in ``--radio`` tests, a locked folder.
 
-Before any test, the fast kernel's two entry points are compiled (or loaded)
-at once in two processes (``tests/kernel_warmup.py``).
+Before any test, the fast kernel's two entry points and the bootstrap's
+compiled loops are compiled (or loaded) at once in three processes
+(``tests/kernel_warmup.py``).
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ def _compile_kernel(config: pytest.Config) -> None:
     """Have the fast kernel's machine code cached before the tests (or their workers) start.
 
     Its first compilation takes minutes on one core. Done here, the two
-    entry points compile side by side; without it, each test worker (and
+    entry points (and the statistics' loops) compile side by side; without it, each test worker (and
     each command-line test's own process) would compile the kernel again
     while the first was still at it, and the command-line tests would see
     the first-compilation note on stderr. Once cached, this loads it in
