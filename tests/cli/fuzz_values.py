@@ -675,6 +675,14 @@ BY_COMMAND: dict[tuple[str, ...], dict[str, Values]] = {
         "counter_file": file_output(".counters"),
         "host": texts(["127.0.0.1", "::1", "localhost"], ["256.0.0.1", "no such host"]),
         "port": integers(0, 65535, (0, 0)),  # any free port: parallel workers never collide
+        "replay": Values(
+            st.one_of(EVENT_LOG.good, copy("trial.mcap")),
+            st.one_of(EVENT_LOG.bad, BAG.bad),
+        ),
+        "key_file": ROLE_KEY,  # --scan: the operator key signs; a robot key is refused
+        "writer": integers(0, 0xFFFF, (0, 3)),
+        "adapter": ADAPTER,
+        "backend": SCAN_BACKEND,  # --scan hears the bench radio, never a real one
     },
     ("calibrate",): {
         "baseline": BASELINE,
@@ -705,6 +713,7 @@ INPUTS = {
     ("tag", "write"): ("key_file", "loopback_key"),
     ("tag", "emulate"): ("key_file", "replay"),
     ("log", "import"): ("bag", "mapping"),
+    ("console",): ("replay", "key_file"),
     ("aruco", "render"): ("camera",),
     ("aruco", "detect"): ("image", "camera"),
 }

@@ -58,10 +58,10 @@ class Console:
         return time.monotonic() - start
 
 
-def start(folder: Path, *args: str) -> Console:
-    """Start ``swarmtag console --sim --port 0`` in ``folder``; wait for its URL line."""
+def start(folder: Path, *args: str, source: tuple[str, ...] = ("--sim",)) -> Console:
+    """Start ``swarmtag console SOURCE --port 0`` in ``folder``; wait for its URL line."""
     process = subprocess.Popen(
-        [str(SWARMTAG), "console", "--sim", "--port", "0", "--token-file", "token", *args],
+        [str(SWARMTAG), "console", *source, "--port", "0", "--token-file", "token", *args],
         cwd=folder,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -72,8 +72,7 @@ def start(folder: Path, *args: str) -> Console:
     line = process.stdout.readline()
     if not line.startswith("swarmtag console: http://127.0.0.1:"):
         process.kill()
-        raise AssertionError(
-            f"no URL line: {line!r} {process.stderr.read() if process.stderr else ''}"
-        )
+        _out, err = process.communicate()
+        raise AssertionError(f"no URL line: {line!r} {err}")
     url = line.split(": ", 1)[1].strip()
     return Console(process, url, url.split("token=")[1], folder)

@@ -132,3 +132,39 @@ def test_event_stream_sends_state_and_kpis(client):
                 kinds[kind] = json.loads(next(lines).removeprefix("data: "))
     assert {"robots", "tags", "tick"} <= set(kinds["state"])
     assert "deliveries" in kinds["kpis"]
+
+
+def test_replay_controls_need_the_token_and_a_replay(client):
+    assert client.post("/api/replay", json={"playing": False}).status_code == 401
+    answer = client.post("/api/replay", json={"playing": False}, headers=bearer())
+    assert answer.status_code == 409
+    assert "no replay controls" in answer.json()["error"]
+
+
+@pytest.fixture
+def replay_client(tmp_path):
+    from swarmtag.console.replay_file import read_recording
+    from swarmtag.console.server import replay_core
+    from tests.console.recordings import TICK, write_log
+
+    recording = read_recording(write_log(tmp_path), tick_seconds=TICK)
+    core = replay_core(recording, audit_log=tmp_path / "audit.jsonl")
+    with TestClient(make_app(core, TOKEN), base_url="http://127.0.0.1") as client:
+        yield client
+
+
+def test_replay_controls_seek_and_the_tags_follow(replay_client):
+    client = replay_client
+    answer = client.post("/api/replay", json={"playing": False, "time": 40}, headers=bearer())
+    assert answer.status_code == 200, answer.text
+    assert answer.json()["playing"] is False
+    tags = client.get("/api/tags", headers=bearer()).json()
+    assert [t["status"] for t in tags] == ["idle", "picked_up", "awaiting_pickup"]
+    bad = client.post("/api/replay", json={"time": -5}, headers=bearer())
+    assert bad.status_code == 422
+    client.get(f"/?token={TOKEN}")
+    forged = client.post("/api/replay", json={"time": 0})  # the cookie alone: another site
+    assert forged.status_code == 403
+    write = client.post("/api/tags/1/urgency", json={"urgency": 9}, headers=bearer())
+    assert write.status_code == 409
+    assert "a replay cannot be re-prioritised" in write.json()["error"]

@@ -94,3 +94,132 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, args, says):
     assert lines[0].startswith("swarmtag: error:")
     assert says in lines[0]
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (["--sim", "--scan"], "--sim and --scan: give one source"),
+        (["--scan", "--replay", "run.csv"], "--scan and --replay: give one source"),
+        (["--replay", "missing.csv"], "no such file"),
+        (["--replay", "notes.txt"], "not an event log"),
+        (["--replay", "broken.csv"], "lacks columns"),
+        (["--replay", "broken.mcap"], "broken.mcap"),
+        (["--scan", "--key-file", "missing.key", "--backend", "sim"], "missing.key"),
+    ],
+)
+def test_bad_sources_are_one_line_and_exit_2(tmp_path, args, says):
+    (tmp_path / "notes.txt").write_text("hello\n")
+    (tmp_path / "broken.csv").write_text("a,b\n1,2\n")
+    (tmp_path / "broken.mcap").write_bytes(b"\x89MCAP0\r\n" + b"\0" * 40)
+    before = sorted(tmp_path.iterdir())
+    done = subprocess.run(
+        [str(SWARMTAG), "console", "--port", "0", *args],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert lines[0].startswith("swarmtag: error:")
+    assert says in lines[0]
+    assert sorted(tmp_path.iterdir()) == before  # no token, no audit log
+
+
+def test_scan_without_an_adapter_is_one_line(tmp_path, monkeypatch, capsys):
+    """bleak's scanner fails as on a machine with no adapter: exit 2, nothing written."""
+    pytest.importorskip("bleak", reason="the ble extra")
+    from swarmtag.cli import main
+    from swarmtag.tag.backends import bleak as bleak_backend
+
+    class NoAdapter:
+        def __init__(self, **_options):
+            pass
+
+        async def start(self):
+            raise bleak_backend.BleakError("No Bluetooth adapters found.")
+
+        async def stop(self):
+            pass
+
+    monkeypatch.setattr(bleak_backend.bleak, "BleakScanner", NoAdapter)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as ended:
+        main(["console", "--scan", "--port", "0"])
+    assert ended.value.code == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line == (
+        "swarmtag: error: --scan: no Bluetooth adapter found: plug in a BLE adapter and "
+        "check 'bluetoothctl list'"
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_scan_without_bleak_is_one_line(tmp_path, monkeypatch, capsys):
+    import sys
+
+    from swarmtag.cli import main
+
+    monkeypatch.setitem(sys.modules, "bleak", None)
+    monkeypatch.delitem(sys.modules, "swarmtag.tag.backends.bleak_writer", raising=False)
+    monkeypatch.delitem(sys.modules, "swarmtag.tag.backends.bleak", raising=False)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as ended:
+        main(["console", "--scan", "--port", "0"])
+    assert ended.value.code == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line == (
+        "swarmtag: error: console --scan needs the bleak package, which is not installed: "
+        "pip install 'swarmtag[ble]'"
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_replay_serves_the_file_and_refuses_writes(tmp_path):
+    from tests.console.recordings import write_log
+
+    write_log(tmp_path)
+    running = start(tmp_path, "--tick", "0.1", source=("--replay", "run.csv"))
+    try:
+        status, body = running.get("/api/floor", token=running.token)
+        assert status == 200
+        floor = json.loads(body)
+        assert (floor["source"], floor["kind"]) == ("replay", "none")
+        status, body = running.post("/api/replay", b'{"playing": false, "time": 8}')
+        assert status == 200, body
+        tags = json.loads(running.get("/api/tags", token=running.token)[1])
+        assert {t["marker"]: t["status"] for t in tags} == {
+            0: "idle",
+            1: "picked_up",
+            2: "awaiting_pickup",
+        }
+        status, body = running.post("/api/tags/1/urgency", b'{"urgency": 9}')
+        assert status == 409
+        assert "a replay cannot be re-prioritised" in json.loads(body)["error"]
+        (line,) = (tmp_path / "swarmtag-console-audit.jsonl").read_text().splitlines()
+        assert json.loads(line)["status"] == 409
+        assert running.interrupt() < 1.0
+    finally:
+        running.close()
+
+
+def test_scan_on_the_bench_radio_serves_and_writes(tmp_path):
+    pytest.importorskip("bleak", reason="the ble extra")
+    running = start(tmp_path, "--backend", "sim", source=("--scan",))
+    try:
+        deadline = time.monotonic() + 5
+        tags: list[dict[str, object]] = []
+        while len(tags) < 3 and time.monotonic() < deadline:
+            tags = json.loads(running.get("/api/tags", token=running.token)[1])
+            time.sleep(0.1)
+        assert sorted(t["marker"] for t in tags) == [7, 12, 21]
+        status, body = running.post("/api/tags/21/urgency", b'{"urgency": 0}')
+        assert status == 200, body
+        tags = json.loads(running.get("/api/tags", token=running.token)[1])
+        assert {t["marker"]: t["urgency"] for t in tags}[21] == 0
+        assert running.interrupt() < 1.0
+    finally:
+        running.close()

@@ -20,12 +20,11 @@ from typing import Any, Final
 
 from swarmtag.console.audit import AuditLog
 from swarmtag.console.auth import RateLimiter
-from swarmtag.console.sim_source import SimSource, SourceRefusal
-from swarmtag.console.writes import OperatorDesk
+from swarmtag.console.source import ConsoleSource, Desk, SourceRefusal
 from swarmtag.errors import FieldRangeError, SwarmtagError, WriteRejected
 from swarmtag.tag import Change, TagStatus
 
-__all__ = ["FIELDS", "MAX_BODY", "ConsoleCore", "Reply", "kpis_of"]
+__all__ = ["FIELDS", "MAX_BODY", "ConsoleCore", "Reply"]
 
 MAX_BODY: Final = 1024
 """Bytes a write's body may have (``{"urgency": 9}`` is 14)."""
@@ -55,33 +54,6 @@ def _error(status: int, message: str) -> Reply:
     return Reply(status, {"error": message})
 
 
-def kpis_of(source: SimSource) -> dict[str, Any]:
-    """Deliveries, P95 and mean latency (s), PA, throughput (per 100 s) of the runs so far (§5)."""
-    from swarmtag.analysis.kpis import condition_kpis, run_values  # noqa: PLC0415 - heavy
-    from swarmtag.analysis.runs import ConditionRuns  # noqa: PLC0415 - heavy
-    from swarmtag.io import CarrierLog  # noqa: PLC0415 - heavy
-
-    log = CarrierLog.concat(source.logs())
-    values = run_values(ConditionRuns.from_log(log, source.params.condition))
-    k = condition_kpis(values)
-    scale = source.tick_seconds if log.time_unit == "tick" else 1.0
-
-    def seconds(value: float | None) -> float | None:
-        return None if value is None else round(value * scale, 3)
-
-    return {
-        "condition": k.condition,
-        "runs": k.runs,
-        "deliveries": k.total_deliveries,
-        "waiting": k.undelivered,
-        "p95_latency": seconds(k.p95_latency),
-        "mean_latency": seconds(k.mean_latency),
-        "pa": round(k.pa, 4),
-        "throughput": None if k.throughput is None else round(k.throughput / scale, 3),
-        "units": {"latency": "s", "throughput": "deliveries per 100 s"},
-    }
-
-
 def _value(field: str, raw: object) -> int | TagStatus:
     """The value of ``field`` from the body, or ``FieldRangeError`` naming what is allowed."""
     if field == "status":
@@ -101,8 +73,8 @@ class ConsoleCore:
 
     def __init__(
         self,
-        source: SimSource,
-        desk: OperatorDesk,
+        source: ConsoleSource,
+        desk: Desk,
         audit: AuditLog,
         *,
         limiter: RateLimiter | None = None,
@@ -121,8 +93,12 @@ class ConsoleCore:
         snap = self.source.snapshot()
         now = snap["time"]
         for tag in snap["tags"]:
-            waiting = tag["status"] != "idle" and tag["delivered_at"] is None
-            tag["waited"] = round(now - tag["order_time"], 3)
+            ordered = tag.get("order_time")
+            if ordered is None:  # real tags: no order time, so nothing is overdue
+                tag["waited"], tag["overdue"] = None, False
+                continue
+            waiting = tag["status"] != "idle" and tag.get("delivered_at") is None
+            tag["waited"] = round(now - ordered, 3)
             tag["overdue"] = waiting and tag["waited"] > self.overdue_s
         return snap
 
@@ -135,34 +111,43 @@ class ConsoleCore:
         with self._kpi_lock:
             now = time.monotonic()
             if self._kpis is None or now - self._kpis[0] > _KPI_CACHE_S:
-                self._kpis = (now, kpis_of(self.source))
+                self._kpis = (now, self.source.kpis())
             return Reply(200, self._kpis[1])
 
     def floor(self) -> Reply:
-        """``GET /api/floor``: the still picture (arena, areas, map) and the drop-off areas."""
-        g = self.source.geometry
+        """``GET /api/floor``: the source's still picture, what it is, and the overdue limit."""
         return Reply(
             200,
             {
-                "arena": g.arena,
-                "height": g.extent_y,
-                "pickup_right": g.pickup_right,
-                "dropoff_left": g.dropoff_left,
-                "robot_radius": g.robot_radius,
-                "carrier_size": g.carrier_size,
-                "floor_text": g.floor_text,
-                "floor_cell": g.floor_cell,
-                "destinations": list(self.source.destinations()),
-                "tick_seconds": g.tick_seconds,
+                **self.source.floor(),
+                "source": self.source.kind,
                 "overdue_s": self.overdue_s,
                 "speed": self.source.speed,
             },
         )
 
+    def control(self, body: bytes) -> Reply:
+        """``POST /api/replay``: play, pause, seek or change the speed of a replay."""
+        control = getattr(self.source, "control", None)
+        if control is None:
+            return _error(409, f"the {self.source.kind} source has no replay controls")
+        if len(body) > MAX_BODY:
+            return _error(413, f"the body is over {MAX_BODY} bytes")
+        try:
+            data = json.loads(body)
+        except (ValueError, UnicodeDecodeError):
+            return _error(400, 'the body is not JSON; send e.g. {"playing": false}')
+        try:
+            answer: dict[str, Any] = control(data)
+        except SwarmtagError as error:
+            return _error(422, str(error))
+        return Reply(200, answer)
+
     def marker(self, text: str) -> int | Reply:
         """The marker id in a path, or a 404 reply."""
         if not text.isdecimal() or len(text) > 3 or int(text) not in self.source.markers:
-            return _error(404, f"no tag with marker {text[:20]!r} on this floor")
+            where = "in range" if self.source.kind == "scan" else "on this floor"
+            return _error(404, f"no tag with marker {text[:20]!r} {where}")
         return int(text)
 
     def eink(self, text: str) -> Reply | bytes:
@@ -175,7 +160,7 @@ class ConsoleCore:
         try:
             return png_bytes(self.source.tag_state(marker))
         except KeyError:
-            return _error(404, f"tag {marker} is not on the floor now")
+            return _error(404, f"tag {marker} is not there now")
 
     def write(self, *, who: str, client: str, marker: str, field: str, body: bytes) -> Reply:
         """``POST /api/tags/{marker}/{field}``; the reply and its audit line."""
@@ -240,7 +225,8 @@ class ConsoleCore:
         try:
             accepted = self.desk.write(found, asked)
         except KeyError:
-            raise _Refused(404, f"tag {found} is not on the floor now") from None
+            where = "in range" if self.source.kind == "scan" else "on the floor"
+            raise _Refused(404, f"tag {found} is not {where} now") from None
         except (SourceRefusal, WriteRejected) as error:
             raise _Refused(409, f"refused: {error}") from None
         except SwarmtagError as error:  # e.g. the counter file cannot be written

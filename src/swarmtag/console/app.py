@@ -3,13 +3,16 @@
 Thin on purpose: every answer comes from ``ConsoleCore``; this module only
 checks who is asking (``swarmtag.console.auth``), reads at most
 ``MAX_BODY + 1`` bytes of a write, and turns ``Reply`` into JSON. The
-simulation is stepped by a background task in the app's lifespan, in a
-worker thread, so requests are never held up by a tick.
+source (a simulation, a replay, a scanner) is advanced by a background
+task in the app's lifespan, in a worker thread, so requests are never held
+up by a tick; writes run in a worker thread too (a GATT write waits on the
+radio).
 """
 
 from __future__ import annotations
 
 import asyncio
+import functools
 import json
 import time
 from collections.abc import AsyncIterator, Awaitable, Callable
@@ -144,23 +147,25 @@ def make_app(
 
     async def write(request: Request, caller: str) -> Response:
         if _bearer(request) is None and WRITE_HEADER not in request.headers:
-            reply = Reply(
-                403, {"error": f"a write with the cookie needs the {WRITE_HEADER} header"}
+            return _json(_no_header())
+        body = await _body(request)
+        # in a worker thread: a write over the radio (--scan) runs its own event loop
+        reply = await anyio.to_thread.run_sync(
+            functools.partial(
+                core.write,
+                who=caller,
+                client=request.client.host if request.client else "unknown",
+                marker=request.path_params["marker"],
+                field=request.path_params["field"],
+                body=body,
             )
-            return _json(reply)
-        body = bytearray()
-        async for chunk in request.stream():
-            body += chunk
-            if len(body) > MAX_BODY:
-                break
-        reply = core.write(
-            who=caller,
-            client=request.client.host if request.client else "unknown",
-            marker=request.path_params["marker"],
-            field=request.path_params["field"],
-            body=bytes(body),
         )
         return _json(reply)
+
+    async def replay(request: Request, _who: str) -> Response:
+        if _bearer(request) is None and WRITE_HEADER not in request.headers:
+            return _json(_no_header())
+        return _json(core.control(await _body(request)))
 
     async def events(request: Request, _who: str) -> Response:
         return StreamingResponse(
@@ -186,9 +191,24 @@ def make_app(
         Route("/api/state", guarded(state)),
         Route("/api/events", guarded(events)),
         Route("/api/tags/{marker}/eink", guarded(eink)),
+        Route("/api/replay", guarded(replay), methods=["POST"]),
         Route("/api/tags/{marker}/{field}", guarded(write), methods=["POST"]),
     ]
     return Starlette(routes=routes, lifespan=lifespan)
+
+
+def _no_header() -> Reply:
+    return Reply(403, {"error": f"a write with the cookie needs the {WRITE_HEADER} header"})
+
+
+async def _body(request: Request) -> bytes:
+    """The request's body, read no further than ``MAX_BODY + 1`` bytes."""
+    body = bytearray()
+    async for chunk in request.stream():
+        body += chunk
+        if len(body) > MAX_BODY:
+            break
+    return bytes(body)
 
 
 async def _stepping(core: ConsoleCore) -> None:

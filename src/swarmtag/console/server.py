@@ -1,13 +1,14 @@
 """Putting the console together and serving it: source, desk, audit log, token, uvicorn.
 
-``build_core`` wires a ``ConsoleCore`` from plain settings (tests use it
-without a server); ``serve`` binds the socket first (so the URL printed is
-the one served, even for port 0), prints the token URL once and runs
-uvicorn until Ctrl-C. uvicorn takes SIGINT while it runs, closes the
-connections (event streams end at their next beat, or are cut after
-``SHUTDOWN_S``) and raises the
-signal again once it has stopped, so the command line ends as any
-interrupted command does (exit 130).
+``build_core`` wires a ``ConsoleCore`` for a live simulation from plain
+settings, ``replay_core`` one for a recording and ``scan_core`` one for a
+scanner and its writer (tests use them without a server); ``serve`` binds
+the socket first (so the URL printed is the one served, even for port 0),
+prints the token URL once and runs uvicorn until Ctrl-C. uvicorn takes
+SIGINT while it runs, closes the connections (event streams end at their
+next beat, or are cut after ``SHUTDOWN_S``) and raises the signal again
+once it has stopped, so the command line ends as any interrupted command
+does (exit 130); the source is stopped then (a scanner's radio released).
 """
 
 from __future__ import annotations
@@ -21,8 +22,11 @@ from typing import Final, cast
 from swarmtag.console.api import ConsoleCore
 from swarmtag.console.audit import AuditLog
 from swarmtag.console.auth import RateLimiter
+from swarmtag.console.replay_file import Recording
+from swarmtag.console.replay_source import REPLAY_REFUSAL, ReplaySource
+from swarmtag.console.scan_source import ScanDesk, ScanSource
 from swarmtag.console.sim_source import SimSource
-from swarmtag.console.writes import OperatorDesk
+from swarmtag.console.writes import OperatorDesk, ReadOnlyDesk
 from swarmtag.errors import ConfigError
 from swarmtag.policy import Policy
 from swarmtag.sim import Scenario
@@ -30,7 +34,15 @@ from swarmtag.tag import Role
 from swarmtag.tag.counter import CounterFile
 from swarmtag.tag.keys import derive_role_key
 
-__all__ = ["SHUTDOWN_S", "ConsoleSettings", "bind", "build_core", "serve"]
+__all__ = [
+    "SHUTDOWN_S",
+    "ConsoleSettings",
+    "bind",
+    "build_core",
+    "replay_core",
+    "scan_core",
+    "serve",
+]
 
 SHUTDOWN_S: Final = 0.5
 """Seconds uvicorn waits for open requests (event streams) before it cuts them at Ctrl-C."""
@@ -66,6 +78,42 @@ def build_core(settings: ConsoleSettings) -> ConsoleCore:
         AuditLog(settings.audit_log),
         limiter=RateLimiter(per_second=settings.writes_per_second),
         overdue_s=settings.overdue_s,
+    )
+
+
+def replay_core(
+    recording: Recording,
+    *,
+    audit_log: Path,
+    speed: float = 1.0,
+    overdue_s: float = 90.0,
+    writes_per_second: float = 5.0,
+) -> ConsoleCore:
+    """The console's core for a recorded run: played back, every write refused (409)."""
+    return ConsoleCore(
+        ReplaySource(recording, speed=speed),
+        ReadOnlyDesk(REPLAY_REFUSAL),
+        AuditLog(audit_log),
+        limiter=RateLimiter(per_second=writes_per_second),
+        overdue_s=overdue_s,
+    )
+
+
+def scan_core(
+    source: ScanSource,
+    writer: object | None,
+    *,
+    audit_log: Path,
+    overdue_s: float = 90.0,
+    writes_per_second: float = 5.0,
+) -> ConsoleCore:
+    """The console's core for real tags: ``writer`` is a ``BleakTagWriter`` (None: no key)."""
+    return ConsoleCore(
+        source,
+        ScanDesk(source, writer),
+        AuditLog(audit_log),
+        limiter=RateLimiter(per_second=writes_per_second),
+        overdue_s=overdue_s,
     )
 
 
@@ -123,3 +171,4 @@ def serve(
         server.run(sockets=[sock])
     finally:
         sock.close()
+        core.source.stop()

@@ -22,7 +22,8 @@ from typing import Any, Final
 
 import numpy as np
 
-from swarmtag.errors import ConfigError
+from swarmtag.console.kpis import log_kpis
+from swarmtag.console.source import SourceRefusal
 from swarmtag.io import CarrierLog
 from swarmtag.policy import Policy
 from swarmtag.sim import RandomSource, Scenario, make_params, step
@@ -41,13 +42,10 @@ MAX_TICKS_PER_ADVANCE: Final = 2000
 _HELD: Final = frozenset({TagStatus.IDLE, TagStatus.AWAITING_PICKUP})
 
 
-class SourceRefusal(ConfigError):
-    """A change the live source cannot carry out (HTTP 409): the tag was not written."""
-
-
 class SimSource:
     """A live simulated floor: state, stepping, tag list, floor picture, operator changes."""
 
+    kind = "sim"
     site_key: bytes = SIM_SITE_KEY
     """The site key the simulated tags hold (the operator key derives from it)."""
 
@@ -113,6 +111,34 @@ class SimSource:
         """The event logs of the finished runs and of the run under way."""
         with self._lock:
             return [*self._finished, self.log()]
+
+    def start(self) -> None:
+        """Nothing to switch on: the simulation is stepped by ``advance``."""
+
+    def stop(self) -> None:
+        """Nothing to release."""
+
+    def kpis(self) -> dict[str, Any]:
+        """The KPIs of the runs so far (``swarmtag.console.kpis``)."""
+        log = CarrierLog.concat(self.logs())
+        return log_kpis(log, self.params.condition, self.tick_seconds)
+
+    def floor(self) -> dict[str, Any]:
+        """The still picture: the arena and its areas, or the warehouse map."""
+        g = self.geometry
+        return {
+            "kind": "map" if g.floor_text else "arena",
+            "arena": g.arena,
+            "height": g.extent_y,
+            "pickup_right": g.pickup_right,
+            "dropoff_left": g.dropoff_left,
+            "robot_radius": g.robot_radius,
+            "carrier_size": g.carrier_size,
+            "floor_text": g.floor_text,
+            "floor_cell": g.floor_cell,
+            "destinations": list(self.destinations()),
+            "tick_seconds": g.tick_seconds,
+        }
 
     def _column(self, marker: int) -> int:
         where = np.flatnonzero(self.params.markers == marker)

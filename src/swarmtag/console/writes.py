@@ -14,15 +14,15 @@ is refused by the tag (``WriteRejected``) and changes nothing.
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
 from typing import Protocol
 
+from swarmtag.console.source import Accepted, SourceRefusal
 from swarmtag.tag import Change, MemoryStore, Role, TagModel, TagState
 from swarmtag.tag.counter import CounterFile
 from swarmtag.tag.record import TagRecord
 from swarmtag.tag.write import Write, sign
 
-__all__ = ["Accepted", "OperatorDesk", "WritableSource"]
+__all__ = ["Accepted", "OperatorDesk", "ReadOnlyDesk", "WritableSource"]
 
 
 class WritableSource(Protocol):
@@ -41,15 +41,6 @@ class WritableSource(Protocol):
     def apply(self, marker: int, before: TagState, after: TagState) -> None:
         """Carry out a change the tag accepted."""
         ...
-
-
-@dataclass(frozen=True)
-class Accepted:
-    """An accepted write: the tag's states before and after, and the counter it carried."""
-
-    before: TagState
-    after: TagState
-    counter: int
 
 
 class OperatorDesk:
@@ -106,3 +97,15 @@ class OperatorDesk:
         after = tag.apply(message)
         seen.update(tag.counters)
         return after
+
+
+class ReadOnlyDesk:
+    """The desk of a source that takes no writes: every write is refused, nothing signed."""
+
+    def __init__(self, reason: str) -> None:
+        self.reason = reason
+
+    def write(self, marker: int, change: Change) -> Accepted:
+        """Refuse: ``SourceRefusal`` with the reason (HTTP 409, audited as every refusal)."""
+        del marker, change
+        raise SourceRefusal(self.reason)

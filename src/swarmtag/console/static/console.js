@@ -1,4 +1,6 @@
 // swarmtag console: the floor, the tag table, KPIs and operator writes, from /api/events.
+// One page for every source (/api/floor says which): a live simulation, real tags (no floor),
+// or a replay (play/pause, a time slider and a speed; a file without poses has no floor).
 // Plain JavaScript, no build step. The page's cookie (set by the token URL) authenticates;
 // every write carries the X-Swarmtag-Console header the server requires with the cookie.
 "use strict";
@@ -6,7 +8,7 @@
 const RAMP = ["#2c7bb6", "#4a98c5", "#74b3d3", "#abd9e9", "#d6eef0",
   "#ffffbf", "#fed98e", "#fdae61", "#ec6b3e", "#d7191c"];
 const view = { floor: null, state: null, selected: null, sortKey: "urgency", sortUp: false,
-  filter: "", history: [] };
+  filter: "", history: [], sliding: false, version: 0 };
 const $ = (id) => document.getElementById(id);
 
 function show(message, kind) {
@@ -73,7 +75,7 @@ function drawStill(ctx, f, s) {
 }
 
 function drawFloor() {
-  if (!view.floor || !view.state) return;
+  if (!view.floor || !view.state || view.floor.kind === "none") return;
   const canvas = $("floor");
   const ctx = canvas.getContext("2d");
   const f = view.floor;
@@ -94,7 +96,7 @@ function drawFloor() {
   const half = Math.max(5, (f.carrier_size * s) / 2);
   const drawn = [];
   for (const t of view.state.tags) {
-    if (!t.present) continue;
+    if (!t.present || t.x === null) continue;
     ctx.fillStyle = t.status === "idle" ? "#bbb" : RAMP[t.urgency];
     ctx.fillRect(X(t.x) - half, Y(t.y) - half, 2 * half, 2 * half);
     ctx.lineWidth = t.marker === view.selected ? 3 : 1;
@@ -128,7 +130,7 @@ function pickOnFloor(event) {
   const y = h - ((event.clientY - box.top) * canvas.height / box.height) / s;
   let best = null; let bestD = Infinity;
   for (const t of view.state.tags) {
-    if (!t.present) continue;
+    if (!t.present || t.x === null) continue;
     const d = Math.hypot(t.x - x, t.y - y);
     if (d < bestD) { best = t; bestD = d; }
   }
@@ -202,13 +204,28 @@ function select(marker) {
 // ---- KPIs -----------------------------------------------------------------------------------
 function fmt(value, unit) { return value === null ? "–" : `${value}${unit}`; }
 
+function kpiRows(k) {
+  if (k.kind === "scan") {
+    return [["tags", "tags in range", k.tags], ["awaiting", "awaiting pickup", k.awaiting_pickup],
+      ["picked", "picked up", k.picked_up], ["idle", "idle", k.idle],
+      ["urgency", "mean / max urgency", k.mean_urgency === null ? "–" : `${k.mean_urgency} / ${k.max_urgency}`],
+      ["adverts", "adverts (foreign, malformed)", `${k.adverts} (${k.foreign}, ${k.malformed})`],
+      ["writes", "writes accepted", k.writes]];
+  }
+  return [["deliveries", "deliveries", `${k.deliveries} (${k.runs} run${k.runs === 1 ? "" : "s"})`],
+    ["p95", "P95 latency", fmt(k.p95_latency, " s")], ["mean", "mean latency", fmt(k.mean_latency, " s")],
+    ["pa", "PA", k.pa === null ? "–" : k.pa.toFixed(3)], ["throughput", "throughput", fmt(k.throughput, " / 100 s")]];
+}
+
 function showKpis(k) {
-  $("kpi-deliveries").textContent = `${k.deliveries} (${k.runs} run${k.runs === 1 ? "" : "s"})`;
-  $("kpi-p95").textContent = fmt(k.p95_latency, " s");
-  $("kpi-mean").textContent = fmt(k.mean_latency, " s");
-  $("kpi-pa").textContent = k.pa.toFixed(3);
-  $("kpi-throughput").textContent = fmt(k.throughput, " / 100 s");
-  view.history.push(k.deliveries);
+  const list = $("kpi-list");
+  list.replaceChildren(...kpiRows(k).flatMap(([id, label, value]) => {
+    const dt = document.createElement("dt"); dt.textContent = label;
+    const dd = document.createElement("dd"); dd.id = `kpi-${id}`; dd.textContent = String(value);
+    return [dt, dd];
+  }));
+  const series = k.kind === "scan" ? k.tags : k.deliveries;
+  view.history.push(series);
   if (view.history.length > 120) view.history.shift();
   const c = $("sparkline"); const ctx = c.getContext("2d");
   ctx.clearRect(0, 0, c.width, c.height);
@@ -222,13 +239,75 @@ function showKpis(k) {
   ctx.strokeStyle = "#2c7bb6"; ctx.stroke();
 }
 
+// ---- replay ---------------------------------------------------------------------------------
+async function control(change) {
+  const answer = await api("/api/replay", {
+    method: "POST",
+    headers: { "Content-Type": "application/json", "X-Swarmtag-Console": "1" },
+    body: JSON.stringify(change),
+  });
+  if (!answer.ok) { show(answer.body ? answer.body.error : "HTTP " + answer.status, "error"); return; }
+  view.version = Math.max(view.version, answer.body.version);  // older events are stale now
+  showReplay(answer.body);
+  const state = await api("/api/state");  // show the new moment now, paused or not
+  if (state.ok) showState(state.body);
+}
+
+function showReplay(r) {
+  $("replay-play").textContent = r.playing ? "pause" : "play";
+  $("replay-play").dataset.playing = String(r.playing);
+  const slider = $("replay-slider");
+  slider.max = String(r.duration);
+  if (!view.sliding) slider.value = String(r.position);
+  $("replay-position").textContent = `${r.position.toFixed(1)} / ${r.duration.toFixed(1)} s`;
+  const speed = $("replay-speed");
+  if (document.activeElement !== speed) speed.value = String(r.speed);
+}
+
+function startReplay() {
+  $("replay-controls").hidden = false;
+  $("replay-play").addEventListener("click", () =>
+    control({ playing: $("replay-play").dataset.playing !== "true" }));
+  const slider = $("replay-slider");
+  slider.addEventListener("input", () => { view.sliding = true; });
+  slider.addEventListener("change", () => { view.sliding = false; control({ time: Number(slider.value) }); });
+  $("replay-speed").addEventListener("change", (e) => control({ speed: Number(e.target.value) }));
+}
+
+function showState(state) {
+  const s = state;
+  const source = view.floor.source;
+  if (source === "replay") {
+    const r = s.replay;
+    if (r.version < view.version) return;  // sent before the last control took effect
+    $("clock").textContent = `${view.floor.file} · ${r.condition} run ${s.run} (${r.segment + 1} of ${r.segments}) · t = ${s.time.toFixed(1)} s`;
+    showReplay(r);
+  } else if (source === "scan") {
+    $("clock").textContent = `${s.tags.length} tag${s.tags.length === 1 ? "" : "s"} in range · ` +
+      (s.radio ? `radio: ${s.radio}` : `listening ${s.time.toFixed(0)} s`);
+  } else {
+    $("clock").textContent = `run ${s.run} · t = ${s.time.toFixed(1)} s · ${view.floor.speed}× real time`;
+  }
+  view.state = s;
+  drawFloor(); drawTable();
+}
+
 // ---- start ----------------------------------------------------------------------------------
 async function start() {
   const floor = await api("/api/floor");
   if (!floor.ok) { $("clock").textContent = "not authorised: open the URL the server printed"; return; }
   view.floor = floor.body;
   const canvas = $("floor");
-  canvas.height = Math.round(canvas.width * view.floor.height / view.floor.arena);
+  $("source").textContent = view.floor.source;
+  if (view.floor.kind === "none") {
+    canvas.hidden = true;
+    document.querySelector("#floor-panel .legend").hidden = true;
+    $("floor-note").hidden = false;
+    $("floor-note").textContent = view.floor.why;
+  } else {
+    canvas.height = Math.round(canvas.width * view.floor.height / view.floor.arena);
+  }
+  if (view.floor.source === "replay") startReplay();
   const buttons = $("urgency-buttons");
   for (let u = 0; u <= 9; u++) {
     const b = document.createElement("button");
@@ -253,11 +332,7 @@ async function start() {
   const events = new EventSource("/api/events");
   events.addEventListener("open", () => { $("link").textContent = "live"; $("link").className = "ok"; });
   events.addEventListener("error", () => { $("link").textContent = "offline"; $("link").className = "bad"; });
-  events.addEventListener("state", (e) => {
-    view.state = JSON.parse(e.data);
-    $("clock").textContent = `run ${view.state.run} · t = ${view.state.time.toFixed(1)} s · ${view.floor.speed}× real time`;
-    drawFloor(); drawTable();
-  });
+  events.addEventListener("state", (e) => showState(JSON.parse(e.data)));
   events.addEventListener("kpis", (e) => showKpis(JSON.parse(e.data)));
 }
 
