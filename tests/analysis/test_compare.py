@@ -147,3 +147,45 @@ def test_the_smallest_mann_whitney_p_is_scipys_for_samples_that_do_not_overlap(f
     low, high = np.arange(first, dtype=float), np.arange(second, dtype=float) + 100
     exact = scipy.stats.mannwhitneyu(low, high, alternative="two-sided", method="exact").pvalue
     assert smallest_mann_whitney_p(first, second) == pytest.approx(exact)
+
+
+def test_the_tests_of_all_metrics_are_one_scipy_call_with_scipys_p_values(monkeypatch):
+    # 25 runs a side, no value missing: every metric's samples have one size, above the
+    # eight where scipy would test exactly; the batched p-values are scipy's, bit for bit.
+    import scipy.stats
+
+    rng = np.random.default_rng(9)
+    log = _two_conditions(rng.exponential(60, 25), rng.exponential(40, 25))
+    base = condition_statistics(ConditionRuns.from_log(log, "proximity"), n_resamples=50)
+    other = condition_statistics(ConditionRuns.from_log(log, "urgency"), n_resamples=50)
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(np.shape(args[0]))
+        return mannwhitneyu(*args, **kwargs)
+
+    monkeypatch.setattr(scipy.stats, "mannwhitneyu", counted)
+    comparisons = compare_all(other, base)
+    tested = [c for c in comparisons if c.p_mannwhitney is not None]
+    assert len(tested) >= 6
+    assert calls == [(len(tested), 25)]
+    for comparison in tested:
+        expected = mannwhitneyu(
+            other.values.per_run(comparison.metric), base.values.per_run(comparison.metric)
+        ).pvalue
+        assert comparison.p_mannwhitney == expected, comparison.metric
+
+
+def test_small_samples_are_tested_one_pair_at_a_time():
+    # Ties in one pair of small samples make scipy test that pair asymptotically; batched
+    # with a pair without ties, they would switch that one too: small pairs go one by one.
+    from swarmtag.analysis.compare import _mann_whitney_ps
+
+    tied = ([1.0, 1.0, 2.0, 3.0], [2.0, 4.0, 5.0, 6.0])
+    untied = ([1.0, 2.0, 3.0, 7.0], [4.0, 5.0, 6.0, 8.0])
+    large = (np.arange(10.0), np.arange(10.0) + 0.5)
+    missing = ([np.nan], [1.0])
+    pairs = [tied, untied, large, missing, (None, [1.0])]
+    expected = [mannwhitneyu(*pair).pvalue for pair in pairs[:3]]
+    assert _mann_whitney_ps(pairs) == [*expected, None, None]
+    assert expected[1] == mannwhitneyu(*untied, method="exact").pvalue

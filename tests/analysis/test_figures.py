@@ -149,3 +149,29 @@ def test_legends_sit_outside_the_data_and_every_figure_has_a_caption(tmp_path, m
         width, height = image.size
         right = image.convert("RGB").crop((width - 3, 0, width, height))
         assert {rgb for _, rgb in right.getcolors()} == {(255, 255, 255)}
+
+
+def test_each_figure_is_drawn_once_and_figure_files_names_them(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    from swarmtag.analysis.figures import figure_files
+
+    draws = []
+    draw = Figure.draw
+
+    def counted(self, renderer):
+        draws.append(self)
+        return draw(self, renderer)
+
+    monkeypatch.setattr(Figure, "draw", counted)
+    log = sweep_log()
+    report = summarize(log, baseline="weighted:w=0.0", n_resamples=50)
+    written = write_figures(report, log, tmp_path)
+    assert figure_files(report, tmp_path) == written
+    assert len(written) == 4
+    assert len(draws) == len(set(draws)) == 4  # no second draw to measure the bounds
+    for path in written:
+        with Image.open(path) as image:
+            assert image.mode == "RGB"
+            assert image.size == (768, 504)  # 6.4 x 4.2 in at 120 pixels per inch
+            break

@@ -219,3 +219,49 @@ def test_the_report_opens_with_the_verdicts_and_warns_of_a_quick_run(tmp_path):
         )
         assert row is not None, outcome.direction.name
         assert row.group(1) == expected
+
+
+def test_the_report_reads_each_table_from_the_store_once(tmp_path, monkeypatch):
+    from swarmtag.experiments.store import ResultsStore
+
+    study = load_study(write_study(tmp_path))
+    out = tmp_path / "out"
+    run_study(study, out_dir=out, workers=1)
+    reads = []
+    for method in ("load_log", "load_events"):
+        original = getattr(ResultsStore, method)
+
+        def counted(self, *args, _original=original, _method=method, **kwargs):
+            reads.append(_method)
+            return _original(self, *args, **kwargs)
+
+        monkeypatch.setattr(ResultsStore, method, counted)
+    write_report(out, [study])
+    assert sorted(reads) == ["load_events", "load_log"]  # the export writes the same tables
+    assert (out / study.name / "default" / "carriers.csv").is_file()
+
+
+def test_figures_drawn_in_worker_processes_are_the_same_files(tmp_path, monkeypatch):
+    from swarmtag.experiments import report
+
+    scaled = SMALL_TOML.replace("[scenario]\nrobots = 3\ncarriers = 7\n", "")
+    scaled += (
+        '\n[scales."3x7"]\nrobots = 3\ncarriers = 7\n\n[scales."4x8"]\nrobots = 4\ncarriers = 8\n'
+    )
+    study = load_study(write_study(tmp_path, scaled))
+    out = tmp_path / "out"
+    run_study(study, out_dir=out, workers=1)
+
+    def files():
+        found = sorted((out / study.name).rglob("*.png"))
+        return {path.relative_to(out): path.read_bytes() for path in found}
+
+    here = write_report(out, [study]).read_text(encoding="utf-8")
+    drawn_here = files()
+    assert len(drawn_here) == 6
+    monkeypatch.setattr(report, "FIGURE_WORKERS_FROM", 1)
+    monkeypatch.setattr(report.os, "cpu_count", lambda: 2)
+    assert report._figure_workers(2) == 1  # one worker beside this process
+    elsewhere = write_report(out, [study]).read_text(encoding="utf-8")
+    assert files() == drawn_here
+    assert elsewhere == here

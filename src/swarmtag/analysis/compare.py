@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import importlib
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
@@ -99,6 +100,18 @@ def mann_whitney_p(x: ArrayLike | None, y: ArrayLike | None) -> float | None:
     >>> mann_whitney_p([1.0], [np.nan]) is None
     True
     """
+    return _mann_whitney_ps([(x, y)])[0]
+
+
+_EXACT_UP_TO: Final = 8
+"""scipy's default method tests a sample this small exactly unless ties occur anywhere in the
+call; from one sample larger, always asymptotically: then a call of many pairs is many calls."""
+
+
+def _samples(
+    x: ArrayLike | None, y: ArrayLike | None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """The two samples ``mann_whitney_p`` tests (NaN left out), or None where there is no test."""
     if x is None or y is None:  # a metric without per-run values (the KM P95)
         return None
     first = check_array("x", x, nan=True, error=StatisticsError)
@@ -107,9 +120,39 @@ def mann_whitney_p(x: ArrayLike | None, y: ArrayLike | None) -> float | None:
     second = second[~np.isnan(second)]
     if first.size == 0 or second.size == 0:
         return None
+    return first, second
+
+
+def _mann_whitney_ps(
+    pairs: Sequence[tuple[ArrayLike | None, ArrayLike | None]],
+) -> list[float | None]:
+    """``mann_whitney_p`` of each pair: the same numbers, pairs of one size in one scipy call.
+
+    Pairs whose samples have the same sizes, both larger than ``_EXACT_UP_TO``, go
+    to one call along ``axis=1`` (scipy's per-pair arithmetic, the same bits);
+    smaller ones one by one, as ties in one pair would change another's method.
+    """
+    samples = [_samples(x, y) for x, y in pairs]
+    ps: list[float | None] = [None] * len(samples)
+    sizes: dict[tuple[int, int], list[int]] = {}
+    for index, tested in enumerate(samples):
+        if tested is not None:
+            sizes.setdefault((tested[0].size, tested[1].size), []).append(index)
+    if not sizes:
+        return ps
     # scipy.stats takes a while to import (and ships no stubs): load it when a test runs.
     stats = importlib.import_module("scipy.stats")
-    return float(stats.mannwhitneyu(first, second, alternative="two-sided").pvalue)
+    for (first, second), members in sizes.items():
+        chosen = [tested for index in members if (tested := samples[index]) is not None]
+        if min(first, second) > _EXACT_UP_TO:
+            x = np.stack([pair[0] for pair in chosen])
+            y = np.stack([pair[1] for pair in chosen])
+            values = stats.mannwhitneyu(x, y, alternative="two-sided", axis=1).pvalue
+        else:
+            values = [stats.mannwhitneyu(*pair, alternative="two-sided").pvalue for pair in chosen]
+        for index, value in zip(members, values, strict=True):
+            ps[index] = float(value)
+    return ps
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,6 +203,14 @@ def compare(
     check_instance("condition", condition, ConditionStatistics, error=StatisticsError)
     check_instance("baseline", baseline, ConditionStatistics, error=StatisticsError)
     check_text("metric", metric, error=StatisticsError)
+    _check_alike(condition, baseline)
+    condition.estimate(metric), baseline.estimate(metric)  # refuse an unknown metric first
+    runs = (condition.values.per_run(metric), baseline.values.per_run(metric))
+    return _compare(condition, baseline, metric, mann_whitney_p(*runs))
+
+
+def _check_alike(condition: ConditionStatistics, baseline: ConditionStatistics) -> None:
+    """Refuse two conditions bootstrapped with other resamples or confidence levels."""
     if condition.n_resamples != baseline.n_resamples:
         raise StatisticsError(
             f"{condition.condition} has {condition.n_resamples} resamples but the baseline "
@@ -167,14 +218,19 @@ def compare(
         )
     if condition.confidence_level != baseline.confidence_level:
         raise StatisticsError("the two conditions were computed at different confidence levels")
+
+
+def _compare(
+    condition: ConditionStatistics,
+    baseline: ConditionStatistics,
+    metric: str,
+    p_mannwhitney: float | None,
+) -> Comparison:
+    """``compare``, its Mann-Whitney p-value given."""
     mine, theirs = condition.estimate(metric), baseline.estimate(metric)
     differences = mine.bootstrap_distribution - theirs.bootstrap_distribution
     differences.flags.writeable = False
     diff = None if mine.value is None or theirs.value is None else mine.value - theirs.value
-    mine_runs, theirs_runs = condition.values.per_run(metric), baseline.values.per_run(metric)
-    p_mannwhitney = (
-        None if mine_runs is None or theirs_runs is None else mann_whitney_p(mine_runs, theirs_runs)
-    )
     return Comparison(
         condition=condition.condition,
         baseline=baseline.condition,
@@ -195,11 +251,17 @@ def compare(
 def compare_all(
     condition: ConditionStatistics, baseline: ConditionStatistics
 ) -> tuple[Comparison, ...]:
-    """``compare`` for every metric both have, in the order of ``METRICS`` (then optional ones)."""
+    """``compare`` for every metric both have, in the order of ``METRICS`` (then optional ones).
+
+    The Mann-Whitney tests of all metrics are batched (``_mann_whitney_ps``).
+    """
     check_instance("condition", condition, ConditionStatistics, error=StatisticsError)
     check_instance("baseline", baseline, ConditionStatistics, error=StatisticsError)
+    _check_alike(condition, baseline)
+    metrics = [metric for metric in condition.metrics if metric in baseline.metrics]
+    ps = _mann_whitney_ps(
+        [(condition.values.per_run(metric), baseline.values.per_run(metric)) for metric in metrics]
+    )
     return tuple(
-        compare(condition, baseline, metric)
-        for metric in condition.metrics
-        if metric in baseline.metrics
+        _compare(condition, baseline, metric, p) for metric, p in zip(metrics, ps, strict=True)
     )

@@ -35,6 +35,7 @@ from swarmtag.policy import Urgency, Weighted, parse_policy
 __all__ = [
     "condition_colours",
     "draw_curves",
+    "figure_files",
     "latency_curve_figure",
     "pa_curve_figure",
     "pareto_figure",
@@ -44,6 +45,8 @@ __all__ = [
 ]
 
 _SIZE: Final = (6.4, 4.2)
+_DPI: Final = 120
+"""Pixels per inch of the PNGs."""
 _SWEEP_RANGE: Final = (0.0, 0.88)
 """The stretch of viridis a sweep spans: its last yellows are too pale on white."""
 Colour = tuple[float, float, float, float]
@@ -51,12 +54,22 @@ Colour = tuple[float, float, float, float]
 
 
 def _save(fig: Any, path: str | os.PathLike[str], caption: str) -> None:  # noqa: ANN401 - a Figure
-    """Write the PNG with ``caption`` as its description; the bounds take in outside legends."""
+    """Write the PNG with ``caption`` as its description, the figure drawn once.
+
+    ``tight_layout`` makes room for outside legends, so no ``bbox_inches="tight"``
+    (a second draw to measure); the pixels go from the Agg canvas to Pillow as RGB (the
+    figure is opaque: an alpha channel would only double the compression time).
+    """
+    from PIL import Image, PngImagePlugin  # noqa: PLC0415 - Pillow comes with matplotlib
+
+    fig.set_dpi(_DPI)  # before the layout, so that it measures the text as drawn
     fig.tight_layout()
+    fig.canvas.draw()
+    pixels = np.asarray(fig.canvas.buffer_rgba())
+    info = PngImagePlugin.PngInfo()
+    info.add_text(CAPTION_KEY, caption)
     with atomic_path(path) as temp:
-        fig.savefig(
-            temp, format="png", dpi=120, bbox_inches="tight", metadata={CAPTION_KEY: caption}
-        )
+        Image.fromarray(pixels[..., :3]).save(temp, format="png", pnginfo=info, dpi=(_DPI, _DPI))
 
 
 def _outside_legend(ax: Any, **options: Any) -> Any:  # noqa: ANN401 - matplotlib Axes, Legend
@@ -316,16 +329,24 @@ def _sweepable(names: Sequence[str]) -> bool:
     return len(names) >= 2 and len(kinds) == 1 and kinds <= {Weighted, Urgency}
 
 
-def write_figures(
-    report: MetricsReport, log: CarrierLog, folder: str | os.PathLike[str]
-) -> list[Path]:
-    """Every figure that applies to ``report`` (computed from ``log``), as PNGs in ``folder``.
+def figure_files(report: MetricsReport, folder: str | os.PathLike[str]) -> list[Path]:
+    """The PNGs ``write_figures`` writes for ``report`` in ``folder``, in its order (none drawn).
 
     Always the PA curves, latency curves and latency per urgency level; the
     parameter sweep too when all conditions are one parametrised policy.
     """
     out = Path(folder)
-    written = [out / "pa_curves.png", out / "latency_curves.png", out / "urgency_latency.png"]
+    files = [out / "pa_curves.png", out / "latency_curves.png", out / "urgency_latency.png"]
+    if _sweepable([c.condition for c in report.conditions]):
+        files.append(out / "sweep.png")
+    return files
+
+
+def write_figures(
+    report: MetricsReport, log: CarrierLog, folder: str | os.PathLike[str]
+) -> list[Path]:
+    """Every figure that applies to ``report`` (computed from ``log``): ``figure_files``."""
+    written = figure_files(report, folder)
     pa_curve_figure(report, written[0])
     latency_curve_figure(report, written[1])
     levels = {
@@ -333,8 +354,6 @@ def write_figures(
         for c in report.conditions
     }
     urgency_latency_figure(levels, written[2], time_unit=report.time_unit)
-    names = [c.condition for c in report.conditions]
-    if _sweepable(names):
-        written.append(out / "sweep.png")
-        sweep_figure(report, written[-1])
+    if len(written) > 3:
+        sweep_figure(report, written[3])
     return written

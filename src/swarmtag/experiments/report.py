@@ -16,7 +16,9 @@ study parameters, the code version and the wall time of the last run: it
 opens with the verdict on every published claim (``verdicts``), under a
 banner after a quick run, then folds each study into a ``<details>``.
 A warehouse scale's KPIs (tables, figures) cover the orders placed after its
-warm-up (``runner.kpi_log``); its exported logs keep every order.
+warm-up (``runner.kpi_log``); its exported logs keep every order. From
+``FIGURE_WORKERS_FROM`` swarm sizes on, worker processes draw the figures
+while this process goes on with the statistics (``_Drawing``): the same files.
 """
 
 from __future__ import annotations
@@ -25,14 +27,17 @@ import html
 import json
 import os
 from collections.abc import Mapping, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Final
+from types import TracebackType
+from typing import Any, Final, Self
 
 from swarmtag import __version__
 from swarmtag._atomic import atomic_write_bytes
 from swarmtag._inputs import check_path, is_regular_file
 from swarmtag._outputs import OutputPlan
+from swarmtag._pools import spawn_context, stop
 from swarmtag.analysis import ConditionChoices, MetricsReport, choice_statistics, summarize
 from swarmtag.analysis.choice_tables import choices_html, choices_latex, choices_markdown
 from swarmtag.analysis.html import Section, write_html
@@ -55,7 +60,7 @@ from swarmtag.experiments.runner import (
     study_key,
 )
 from swarmtag.experiments.spec import Scale, Study
-from swarmtag.experiments.store import ResultsStore
+from swarmtag.experiments.store import ResultsStore, export_logs
 from swarmtag.experiments.verdicts import judge_reports, quick_banner, verdict_section
 from swarmtag.io import CarrierLog, EventTable
 
@@ -70,6 +75,9 @@ _RANK_NOTE: Final = (
     "a throughput at least as large, one larger. Messages per delivery: the messages the "
     "robots sent (allocators that talk) over the deliveries."
 )
+FIGURE_WORKERS_FROM: Final = 4
+"""Scales in a report from which worker processes draw its figures (three or four a scale):
+below, the figures cost less than starting a worker (about a second: matplotlib's import)."""
 RUN_RECORD: Final = "run.json"
 """Per-study file written after a run: wall time, quick or full, runs computed and reused."""
 
@@ -134,12 +142,84 @@ def _stored_runs(store: ResultsStore, study: Study) -> int:
     return runs
 
 
+def _figure_workers(scales: int) -> int:
+    """Worker processes to draw a report's figures in: none under ``FIGURE_WORKERS_FROM`` scales.
+
+    Else one per core but this process's (at least one), at most one per scale.
+    """
+    if scales < FIGURE_WORKERS_FROM:
+        return 0
+    return max(1, min(scales, (os.cpu_count() or 1) - 1))
+
+
+class _Drawing:
+    """Draws each scale's figures: here, or in ``workers`` spawned processes meanwhile.
+
+    With workers, this process goes on to the next scale's statistics and files
+    while they draw (the same PNGs, byte for byte), then draws the scales no
+    worker has started, last first; leaving the context waits for every figure
+    and raises a worker's error, and an error or Ctrl-C here ends the workers.
+    """
+
+    def __init__(self, workers: int) -> None:
+        self._pool = (
+            ProcessPoolExecutor(max_workers=workers, mp_context=spawn_context())
+            if workers > 0
+            else None
+        )
+        self._pending: list[tuple[Future[list[Path]], MetricsReport, CarrierLog, Path]] = []
+
+    def figures(self, report: MetricsReport, log: CarrierLog, folder: Path) -> list[Path]:
+        """``write_figures(report, log, folder)``'s files, drawn or on their way."""
+        from swarmtag.analysis.figures import (  # noqa: PLC0415 - matplotlib extra
+            figure_files,
+            write_figures,
+        )
+
+        if self._pool is None:
+            return write_figures(report, log, folder)
+        job = self._pool.submit(write_figures, report, log, folder)
+        self._pending.append((job, report, log, folder))
+        return figure_files(report, folder)
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        trace: TracebackType | None,
+    ) -> None:
+        if self._pool is None:
+            return
+        if kind is not None:
+            stop(self._pool)
+            return
+        from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
+
+        try:
+            for job, report, log, folder in reversed(self._pending):
+                if job.cancel():  # no worker took it yet: this process is free to draw it
+                    write_figures(report, log, folder)
+            for job, *_ in self._pending:
+                if not job.cancelled():
+                    job.result()
+        except BaseException:
+            stop(self._pool)
+            raise
+        self._pool.shutdown()
+
+
 @dataclass(frozen=True, eq=False)
 class _ScaleResult:
-    """One scale's report, carrier log and choice statistics (from the stored events)."""
+    """One scale's report, carrier logs and choice statistics (from the stored events)."""
 
     report: MetricsReport
     log: CarrierLog
+    """The runs' carriers in the KPI window (``kpi_log``): what the tables and figures count."""
+    stored: CarrierLog
+    """Every stored carrier (a warehouse's warm-up too): what the exported log holds."""
     choices: tuple[ConditionChoices, ...]
     events: EventTable
 
@@ -151,11 +231,15 @@ def _scale_reports(
     resamples: int,
     known: Mapping[str, MetricsReport],
 ) -> dict[str, _ScaleResult]:
-    """Each scale's summary (``known`` ones reused), carrier log and choice statistics."""
+    """Each scale's summary (``known`` ones reused), carrier logs and choice statistics.
+
+    Each table is read from the store once: the export writes the same ones.
+    """
     reports = {}
     for scale in study.scales:
         key = study_key(study, scale.key)
-        log = kpi_log(store.load_log(key, study.conditions, runs), scale)
+        stored = store.load_log(key, study.conditions, runs)
+        log = kpi_log(stored, scale)
         report = known.get(scale.key) or summarize(
             log, baseline=study.baseline, n_resamples=resamples, seed=study.seed
         )
@@ -167,7 +251,9 @@ def _scale_reports(
             n_resamples=resamples,
             seed=study.seed,
         )
-        reports[scale.key] = _ScaleResult(report=report, log=log, choices=choices, events=events)
+        reports[scale.key] = _ScaleResult(
+            report=report, log=log, stored=stored, choices=choices, events=events
+        )
     return reports
 
 
@@ -243,16 +329,15 @@ def _study_report(
     resamples: int | None,
     export_format: str,
     computed: Sequence[StudyResult],
+    drawing: _Drawing,
 ) -> _StudyReport:
     """Read ``study``'s runs from ``store`` and its run record from ``out_dir``.
 
-    Its logs, tables and figures go to ``target_dir``.
+    Its logs, tables and figures (``drawing``'s) go to ``target_dir``.
 
     A summary in ``computed`` (``run_study``'s, this process) of the same
     study, runs and resamples is used as it is rather than bootstrapped again.
     """
-    from swarmtag.analysis.figures import write_figures  # noqa: PLC0415 - matplotlib extra
-
     record = _read_record(out_dir, study)
     quick = record is not None and record.quick
     with ResultsStore(store, read_only=True) as stored:
@@ -268,16 +353,12 @@ def _study_report(
             {},
         )
         reports = _scale_reports(stored, study, runs, resamples, known)
-        for part in study.scales:
-            target = target_dir / study.name / part.key
-            target.mkdir(parents=True, exist_ok=True)
-            key = study_key(study, part.key)
-            stored.export(key, study.conditions, runs, target, fmt=export_format)
     scales = []
     for scale, result in reports.items():
         report, choices = result.report, result.choices
         folder = target_dir / study.name / scale
         (folder / "figures").mkdir(parents=True, exist_ok=True)
+        export_logs(result.stored, result.events, folder, fmt=export_format)
         markdown = markdown_tables(report) + "\n" + choices_markdown(choices)
         atomic_write_bytes(folder / "tables.md", markdown.encode())
         latex = latex_tables(report) + "\n" + choices_latex(choices)
@@ -286,7 +367,7 @@ def _study_report(
             Section(
                 title=f"swarm {scale}",
                 tables_html=[html_tables(report), choices_html(choices)],
-                figures=write_figures(report, result.log, folder / "figures"),
+                figures=drawing.figures(report, result.log, folder / "figures"),
             )
         )
     summaries = {key: result.report for key, result in reports.items()}
@@ -380,20 +461,23 @@ def write_report(
         raise StudyError(msg)
     plan = OutputPlan(error=StudyError)
     plan.folder("DIR", folder)
+    workers = _figure_workers(sum(len(study.scales) for study in studies))
     with plan.writing() as stage:  # every file of the report, or none of them
         staged = stage.path(folder)
-        done = [
-            _study_report(
-                folder,
-                staged,
-                study,
-                store=store_path,
-                resamples=resamples,
-                export_format=export_format,
-                computed=computed,
-            )
-            for study in studies
-        ]
+        with _Drawing(workers) as drawing:  # every figure drawn before the page embeds them
+            done = [
+                _study_report(
+                    folder,
+                    staged,
+                    study,
+                    store=store_path,
+                    resamples=resamples,
+                    export_format=export_format,
+                    computed=computed,
+                    drawing=drawing,
+                )
+                for study in studies
+            ]
         claims = [
             claim
             for study, result in zip(studies, done, strict=True)

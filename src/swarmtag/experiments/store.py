@@ -41,7 +41,7 @@ from swarmtag._checks import check_bool, check_path_value
 from swarmtag.errors import StoreError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 
-__all__ = ["KEY_COLUMNS", "SCHEMA_SQL", "ResultsStore", "RunKey"]
+__all__ = ["KEY_COLUMNS", "SCHEMA_SQL", "ResultsStore", "RunKey", "export_logs"]
 
 KEY_COLUMNS: Final = ("study", "scale", "condition", "seed", "run", "code_version")
 """The columns that identify a run, in every table."""
@@ -377,14 +377,31 @@ class ResultsStore:
         fmt: str = "csv",
     ) -> tuple[Path, Path]:
         """Write ``carriers.<fmt>`` and ``events.<fmt>`` (``csv`` or ``parquet``) to ``folder``."""
-        if fmt not in ("csv", "parquet"):
-            msg = f"export: format {fmt!r} is not csv or parquet"
-            raise StoreError(msg)
-        target = Path(folder)
-        carriers_path, events_path = target / f"carriers.{fmt}", target / f"events.{fmt}"
-        write_event_log(self.load_log(key, conditions, runs), carriers_path)
-        write_event_table(self.load_events(key, conditions, runs), events_path)
-        return carriers_path, events_path
+        _check_format(fmt)
+        log, events = self.load_log(key, conditions, runs), self.load_events(key, conditions, runs)
+        return export_logs(log, events, folder, fmt=fmt)
+
+
+def _check_format(fmt: str) -> None:
+    """Refuse an export format other than ``csv`` and ``parquet``."""
+    if fmt not in ("csv", "parquet"):
+        msg = f"export: format {fmt!r} is not csv or parquet"
+        raise StoreError(msg)
+
+
+def export_logs(
+    log: CarrierLog, events: EventTable, folder: str | os.PathLike[str], *, fmt: str = "csv"
+) -> tuple[Path, Path]:
+    """Write ``log`` and ``events`` as ``carriers.<fmt>`` and ``events.<fmt>`` to ``folder``.
+
+    What ``ResultsStore.export`` writes, from tables already loaded.
+    """
+    _check_format(fmt)
+    target = Path(folder)
+    carriers_path, events_path = target / f"carriers.{fmt}", target / f"events.{fmt}"
+    write_event_log(log, carriers_path)
+    write_event_table(events, events_path)
+    return carriers_path, events_path
 
 
 def _key_frame(
