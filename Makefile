@@ -69,14 +69,15 @@ typecheck: $(STAMP)
 
 # One pytest worker per logical core (at most 8; psutil may count two vCPUs as one physical core);
 # tests/conftest.py compiles the fast kernel first. Tests that bound seconds run alone after.
+# Each part ends with its slowest tests (--durations), so every run shows where the time goes.
 # The console's browser tests drive the system's Chromium (.ci/run installs it as root).
 CHROMIUM ?= /usr/bin/chromium
 
 unit: $(STAMP)
 	@test -x $(CHROMIUM) || { echo "make test needs Chromium at $(CHROMIUM) for the console's browser tests: run 'apt-get install -y chromium' as root (.ci/run does)"; exit 1; }
 	$(WAIT_FOR_WARMUP)
-	$(BIN)/pytest --numprocesses logical --maxprocesses 8 --dist worksteal -m "not serial"
-	$(BIN)/pytest -m serial
+	$(BIN)/pytest --numprocesses logical --maxprocesses 8 --dist worksteal -m "not serial" --durations=30
+	$(BIN)/pytest -m serial --durations=10
 
 test: lint typecheck unit
 

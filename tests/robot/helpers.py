@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from swarmtag.policy import Policy
@@ -29,14 +30,33 @@ def scenario(robots: int, carriers: int, profile: str = "base", **changes: Any) 
     return Scenario.from_mapping(mapping)
 
 
-def differing_runs(
+@dataclass(frozen=True)
+class Compared:
+    """Two controllers' runs of one scenario: the runs whose logs differ, what happened in them."""
+
+    differing: list[int]
+    """Global run indices whose event logs (carrier rows and event rows) differ."""
+    kinds: frozenset[str]
+    """The kinds of event in the built-in controller's runs."""
+    delivered: int
+    """Carriers delivered in the built-in controller's runs."""
+
+
+def compare_controllers(
     scenario: Scenario, policy: Policy, *, seed: int, runs: int, run_offset: int = 0
-) -> list[int]:
-    """Runs whose event logs (carrier rows and event rows) differ between the two controllers."""
+) -> Compared:
+    """Run the built-in controller and the behaviour trees on the same runs and compare their logs.
+
+    What happened is returned too, so that a test can assert that its runs
+    compared what it is there to compare (lifts, deliveries, ...), not only
+    that nothing differed.
+    """
     builtin = simulate(scenario, policy, seed=seed, runs=runs, run_offset=run_offset)
     trees = simulate(scenario, policy, seed=seed, runs=runs, run_offset=run_offset, controller="bt")
-    return [
+    differing = [
         int(run)
         for i, run in enumerate(builtin.run_ids)
         if run_csv(builtin, i) != run_csv(trees, i)
     ]
+    kinds = frozenset(builtin.events.kind.tolist())
+    return Compared(differing, kinds, int(builtin.delivered.sum()))

@@ -1,4 +1,8 @@
-"""Allocators in whole runs: deterministic, on the reference backend, built-in controller only."""
+"""Allocators in whole runs: deterministic, on the reference backend, built-in controller only.
+
+The runs last until the allocators' first deliveries (``SWARMTAG_LONG_TESTS=1``,
+``tests/long_mode.py``: 900 ticks).
+"""
 
 from __future__ import annotations
 
@@ -11,10 +15,11 @@ from swarmtag.policy import parse_policy
 from swarmtag.sim import Scenario, simulate
 from swarmtag.sim.backends import fast_available
 from swarmtag.sim.determinism import check_determinism, run_csv
+from tests.long_mode import length
 
 ALLOCATORS = ["threshold:theta=5", "oracle:alpha=0.7", "adaptive:gain=0.5"]
 WORLD = Scenario.from_mapping(
-    {**Scenario.default(3, 7, profile="paper-sim").to_mapping(), "ticks": 900}
+    {**Scenario.default(3, 7, profile="paper-sim").to_mapping(), "ticks": length(700, 900)}
 )
 
 
@@ -24,6 +29,8 @@ def test_each_run_is_the_same_alone_and_in_a_batch(name):
         warnings.simplefilter("ignore", BackendFallback)
         result = check_determinism(WORLD, parse_policy(name), seed=4, runs=3, check_invariants=True)
     assert len(result.carriers) == 3 * 7
+    # the runs compared alone and in a batch allocate, lift and deliver
+    assert {"select", "lift", "deliver"} <= set(result.events.kind.tolist())
 
 
 @pytest.mark.parametrize("name", ALLOCATORS)

@@ -2,6 +2,8 @@
 
 A robot's list drops what cannot change its behaviour; these tests make the
 lists small enough to purge and to overflow, and compare with the reference.
+The hall runs for as long as the lists need to fill (``SWARMTAG_LONG_TESTS=1``,
+``tests/long_mode.py``: the full 1,800 ticks).
 """
 
 from __future__ import annotations
@@ -17,8 +19,9 @@ from swarmtag.sim.fast import TagCacheFull, _layout, simulate_fast
 from swarmtag.sim.model import params as params_module
 from swarmtag.sim.model.params import make_params
 from swarmtag.sim.runner import batch_result, seeded_state
+from tests.long_mode import length
 from tests.sim.fast.helpers import assert_same, compare
-from tests.sim.fast.test_equivalence import CASES
+from tests.sim.fast.test_equivalence import CASES, EVENTS
 
 POLICY = Urgency(alpha=0.7)
 
@@ -33,6 +36,8 @@ def _hall(ticks: int = 1800, interval: float = 3.0, **realism: float) -> Scenari
 
 
 THRESHOLD = params_module.SPARSE_FROM_PAIRS
+HALL_TICKS = length(900, 1800)
+"""Ticks of the hall runs that compare whole runs: past the first lifts (from tick 540 on)."""
 
 
 @pytest.fixture(autouse=True)
@@ -61,10 +66,12 @@ def test_runs_without_memory_or_per_pair_draws_keep_sparse_caches():
     assert not make_params(_hall(detection_noise=0.01), POLICY).sparse_tag_cache
     lab = replace(Scenario.default(300, 256), ticks=10)
     small = replace(Scenario.default(3, 7), ticks=10)
-    result = simulate(_hall(), POLICY, seed=1, runs=1, backend="fast")
+    short = _hall(ticks=50)  # the shapes of the caches: a few ticks show them
+    assert make_params(short, POLICY).sparse_tag_cache
+    result = simulate(short, POLICY, seed=1, runs=1, backend="fast")
     assert result.final_state.known_status.shape == (1, 30, 0)
     assert simulate(
-        _hall(), POLICY, seed=1, runs=1, backend="reference"
+        short, POLICY, seed=1, runs=1, backend="reference"
     ).final_state.known_status.shape[:2] == (1, 30)
     assert _layout.cache_capacity_for(sparse) == len(sparse.floor.pickup_slots) + 2 == 44
     assert _layout.cache_capacity_for(make_params(lab, POLICY)) == 64
@@ -125,7 +132,7 @@ def test_a_batch_whose_caches_overflow_starts_again_with_the_same_bytes(monkeypa
         return original(*args, **options)
 
     monkeypatch.setattr(fast_backend, "simulate_fast", counted)
-    scenario = _hall()
+    scenario = _hall(HALL_TICKS)
     reference = simulate(scenario, POLICY, seed=3, runs=2, backend="reference")
     result = simulate(scenario, POLICY, seed=3, runs=2, backend="fast")
     assert_same(reference, result)
@@ -143,7 +150,7 @@ def test_sparse_caches_split_over_threads_agree(monkeypatch):
         return original(self, *arguments)
 
     monkeypatch.setattr(batch, "_split_run", counted)
-    scenario = _hall()
+    scenario = _hall(HALL_TICKS)
     reference = simulate(scenario, POLICY, seed=5, runs=1, backend="reference")
     assert_same(reference, simulate(scenario, POLICY, seed=5, runs=1, backend="fast", threads=2))
     assert split, "the run did not take the split path"
@@ -170,4 +177,5 @@ def test_lab_runs_with_lists_agree(case, policy):
     assert make_params(scenario, policy).sparse_tag_cache
     fast = compare(scenario, policy, seed=11, runs=4, run_offset=3)
     assert fast.final_state.known_status.shape[2] == 0
-    assert (fast.events.kind == "select").sum() > 0
+    missing = EVENTS[case] - set(fast.events.kind.tolist())  # the case's events, on lists
+    assert not missing, f"{case}: no {sorted(missing)} in the compared runs: too short?"
