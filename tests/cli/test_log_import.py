@@ -144,6 +144,33 @@ def test_simulate_mcap_checks_the_recorded_run_s_memory_before_any_work(
     _check_work(Scenario.from_mapping({"ticks": 2_000_000}), 2, 1, 0, record=False)
 
 
+def test_simulate_mcap_refuses_more_carriers_than_one_byte_markers_before_any_work(
+    tmp_path, capsys
+):
+    # a warehouse allocates its orders as carriers: 300 s at an order a second is over 256
+    warehouse = ["--set", "warehouse.map=small-warehouse", "--set", "warehouse.order_interval=1"]
+    code, out, err = run(
+        capsys,
+        "simulate",
+        "--profile",
+        "lab",
+        "--ticks",
+        "3000",
+        "--runs",
+        "1",
+        "--no-progress",
+        *warehouse,
+        "--mcap",
+        str(tmp_path / "run.mcap"),
+    )
+    assert (code, out) == (2, "")
+    assert err.startswith(
+        "swarmtag: error: an MCAP run names its carriers by one-byte marker ids (0-255), "
+    )
+    assert err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_simulate_mcap_then_log_import_gives_the_identical_event_log(tmp_path, capsys):
     events, mcap = tmp_path / "sim.csv", tmp_path / "run.mcap"
     table = tmp_path / "sim-table.csv"

@@ -330,6 +330,9 @@ def simulate_cmd(
     drawn = Drawn(snapshot, animation, trajectories_out, mcap)
     if mcap is not None:
         require_rosbags()  # the missing extra is named before any work
+        from swarmtag.sim.outputs.mcap import check_mcap_carriers  # noqa: PLC0415 - rosbags
+
+        check_mcap_carriers(scenario.carriers)
     resolved = backend_for(controller, backend).name
     if resolved == "fast" and all(not p.compiled for p in policies):
         resolved = "reference"  # every condition falls back (simulate says so)

@@ -132,3 +132,12 @@ def recorded_lab_geometry():
     return simulate(
         scenario("tick"), Proximity(), seed=0, runs=1, record=True
     ).trajectories.geometry
+
+
+def test_mcap_markers_are_one_byte_so_more_carriers_are_refused():
+    from swarmtag.errors import ConfigError
+    from swarmtag.sim.outputs.mcap import MCAP_MARKERS, check_mcap_carriers
+
+    check_mcap_carriers(MCAP_MARKERS)  # markers 0-255
+    with pytest.raises(ConfigError, match="one-byte marker ids"):
+        check_mcap_carriers(MCAP_MARKERS + 1)

@@ -26,7 +26,7 @@ from swarmtag.sim.model.state import Mode
 from swarmtag.sim.outputs.trajectories import Geometry, Trajectories
 from swarmtag.tag import TagStatus
 
-__all__ = ["write_mcap"]
+__all__ = ["MCAP_MARKERS", "check_mcap_carriers", "write_mcap"]
 
 _STATUS_EVENTS: Final = {"lift": int(TagStatus.PICKED_UP), "deliver": int(TagStatus.IDLE)}
 
@@ -52,6 +52,22 @@ def _floor_cells(geometry: Geometry) -> tuple[tuple[str, float, float, float], .
     )
 
 
+MCAP_MARKERS: Final = 256
+"""Carriers an MCAP trial can name: its markers are one byte (``swarmtag_msgs/Trial``,
+as the tag's advertisement byte 5), and a carrier's marker is its index in the run."""
+
+
+def check_mcap_carriers(carriers: int) -> None:
+    """Refuse (``ConfigError``) runs of more carriers than an MCAP trial's markers can name."""
+    if carriers > MCAP_MARKERS:
+        msg = (
+            f"an MCAP run names its carriers by one-byte marker ids (0-{MCAP_MARKERS - 1}), "
+            f"but this scenario has {carriers} carriers (a warehouse's orders over the run): "
+            "shorten the run, lengthen warehouse.order_interval, or write no MCAP"
+        )
+        raise ConfigError(msg)
+
+
 def write_mcap(
     path: str | os.PathLike[str],
     traj: Trajectories,
@@ -61,6 +77,7 @@ def write_mcap(
     run: int,
 ) -> int:
     """Write run ``run`` of ``traj``, with its rows of ``carriers`` and ``events``; the ticks."""
+    check_mcap_carriers(traj.carrier_status.shape[-1])
     row = _run_rows(traj, run)
     log = carriers.take((carriers.run == run) & (carriers.condition == traj.condition))
     table = events.take((events.run == run) & (events.condition == traj.condition))
