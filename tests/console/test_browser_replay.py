@@ -57,6 +57,7 @@ def _open(browser, console):
     page.on("pageerror", lambda error: errors.append(str(error)))
     page.goto(console.url)
     sync_api.expect(page.locator("#link")).to_have_text("live")
+    sync_api.expect(page.locator("#replay-play")).to_be_enabled()  # the first state is drawn
     return context, page, errors
 
 
@@ -77,7 +78,7 @@ def mcap_page(browser, mcap_console):
 
 
 def _statuses(page):
-    rows = page.locator("#tags tbody tr")
+    rows = page.locator("#tags tbody tr[data-marker]")
     return {
         rows.nth(i).get_attribute("data-marker"): rows.nth(i).locator("td.status").text_content()
         for i in range(rows.count())
@@ -101,10 +102,10 @@ def test_the_slider_and_pause_change_what_the_table_shows(log_page):
     sync_api.expect(page.locator("#floor")).to_be_hidden()
     _pause(page)
     _seek(page, 0)
-    sync_api.expect(page.locator("#tags tbody tr")).to_have_count(1, timeout=UPDATE_MS)
+    sync_api.expect(page.locator("#tags tbody tr[data-marker]")).to_have_count(1, timeout=UPDATE_MS)
     assert _statuses(page) == {"0": "awaiting_pickup"}
     _seek(page, 8)  # run 0 at 80 ticks: 0 delivered, 1 on robot, 2 waiting
-    sync_api.expect(page.locator("#tags tbody tr")).to_have_count(3, timeout=UPDATE_MS)
+    sync_api.expect(page.locator("#tags tbody tr[data-marker]")).to_have_count(3, timeout=UPDATE_MS)
     sync_api.expect(page.locator('#tags tbody tr[data-marker="0"] td.status')).to_have_text("idle")
     assert _statuses(page) == {"0": "idle", "1": "picked_up", "2": "awaiting_pickup"}
     sync_api.expect(page.locator("#kpi-deliveries")).to_have_text(re.compile(r"^1 \(1 run\)"))
@@ -122,7 +123,9 @@ def test_play_moves_the_play_head_on(log_page):
     page.locator("#replay-speed").select_option("5")
     page.locator("#replay-play").click()
     sync_api.expect(page.locator("#replay-play")).to_have_text("pause")
-    sync_api.expect(page.locator("#tags tbody tr")).to_have_count(2, timeout=UPDATE_MS)  # 1 ordered
+    sync_api.expect(page.locator("#tags tbody tr[data-marker]")).to_have_count(
+        2, timeout=UPDATE_MS
+    )  # 1 ordered
     sync_api.expect(page.locator("#replay-position")).not_to_have_text(re.compile(r"^0\.0 /"))
     _pause(page)
 
@@ -131,7 +134,7 @@ def test_a_write_is_refused_on_the_page(log_page):
     page = log_page
     _pause(page)
     _seek(page, 8)
-    sync_api.expect(page.locator("#tags tbody tr")).to_have_count(3, timeout=UPDATE_MS)
+    sync_api.expect(page.locator("#tags tbody tr[data-marker]")).to_have_count(3, timeout=UPDATE_MS)
     page.locator('#tags tbody tr[data-marker="2"]').click()
     page.locator('#urgency-buttons button[data-urgency="9"]').click()
     sync_api.expect(page.locator("#message")).to_have_text(

@@ -32,7 +32,7 @@ def page(tmp_path):
 
 
 def test_the_tags_in_range_and_a_write(page):
-    sync_api.expect(page.locator("#tags tbody tr")).to_have_count(3)
+    sync_api.expect(page.locator("#tags tbody tr[data-marker]")).to_have_count(3)
     sync_api.expect(page.locator("#floor-note")).to_contain_text("no floor positions")
     sync_api.expect(page.locator("#floor")).to_be_hidden()
     sync_api.expect(page.locator("#kpi-tags")).to_have_text("3")

@@ -158,6 +158,26 @@ def test_scan_without_an_adapter_is_one_line(tmp_path, monkeypatch, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_scan_bounds_the_wait_for_the_scanner_thread_at_ctrl_c(tmp_path, monkeypatch, capsys):
+    """bleak's scanner thread is waited for at most half a second: Ctrl-C ends within one."""
+    from swarmtag.cli import main
+    from swarmtag.errors import ConfigError
+    from swarmtag.tag import backends
+
+    asked = {}
+
+    def scanner(backend, **options):
+        asked.update(options, backend=backend)
+        raise ConfigError("stop here")
+
+    monkeypatch.setattr(backends, "open_scanner", scanner)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit):
+        main(["console", "--scan", "--port", "0"])
+    assert asked["backend"] == "bleak"
+    assert 0 < asked["join_timeout"] <= 0.5
+
+
 def test_scan_without_bleak_is_one_line(tmp_path, monkeypatch, capsys):
     import sys
 

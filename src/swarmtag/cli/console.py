@@ -33,6 +33,9 @@ DEFAULT_TOKEN_FILE: Final = "swarmtag-console.token"  # noqa: S105 - a file name
 DEFAULT_COUNTER_FILE: Final = "swarmtag-console-operator.counters"
 """The operator's write counters, next to the token file unless --counter-file says."""
 _LOCAL: Final = frozenset({"127.0.0.1", "::1", "localhost"})
+SCANNER_STOP_S: Final = 0.5
+"""Seconds the console waits for bleak's scanner thread at Ctrl-C; the thread is a daemon,
+so a radio slow to let go cannot hold the exit past a second."""
 
 
 def _needs_extra() -> None:
@@ -289,7 +292,7 @@ def _scan(
     if backend == "sim":
         scanner, factory, heard = bench_radio(SIM_SITE_KEY)
     else:
-        scanner = open_scanner("bleak", adapter=adapter)
+        scanner = open_scanner("bleak", adapter=adapter, join_timeout=SCANNER_STOP_S)
     tag_writer = None
     if key_file is not None:
         counters = CounterFile(counter_file or counter_file_for(key_file))

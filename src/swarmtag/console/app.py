@@ -35,10 +35,12 @@ from starlette.routing import Route
 from swarmtag.console.api import MAX_BODY, ConsoleCore, Reply
 from swarmtag.console.auth import COOKIE, WRITE_HEADER, token_matches
 
-__all__ = ["STATIC", "STEP_S", "make_app"]
+__all__ = ["STATIC", "STEP_S", "STREAM_S", "make_app"]
 
 STEP_S: Final = 0.05
 """Seconds between the stepping task's advances (20 a second)."""
+STREAM_S: Final = 0.1
+"""Seconds between an event stream's ``state`` events (10 updates a second)."""
 STATIC: Final = {
     "console.js": "text/javascript; charset=utf-8",
     "console.css": "text/css; charset=utf-8",
@@ -82,7 +84,7 @@ def make_app(
     core: ConsoleCore,
     token: str,
     *,
-    stream_s: float = 0.2,
+    stream_s: float = STREAM_S,
     stopping: Callable[[], bool] = _never,
 ) -> Starlette:
     """The ASGI app serving ``core`` to holders of ``token``; events every ``stream_s``.
@@ -230,15 +232,24 @@ async def _stream(
 ) -> AsyncIterator[str]:
     """Server-sent events: ``state`` every ``every`` seconds, ``kpis`` about once a second.
 
+    The events keep to a fixed schedule (the time a snapshot takes does not
+    stretch the interval; a stream that fell behind skips ahead rather than
+    bursting). Snapshots are taken and encoded in a worker thread, so the
+    event loop never waits for the source's lock while a tick is stepped.
     Starlette ends the stream when the client goes away; the server, by ``stopping``.
     """
     last_kpis = 0.0
+    due = time.monotonic()
     while not stopping():
-        yield _event("state", core.state())
+        yield await anyio.to_thread.run_sync(_state_event, core)
         now = time.monotonic()
         if now - last_kpis >= 1.0:
             last_kpis = now
             yield _event("kpis", (await anyio.to_thread.run_sync(core.kpis)).body)
-        wake = time.monotonic() + every
-        while not stopping() and time.monotonic() < wake:
-            await asyncio.sleep(min(_BEAT_S, every))
+        due = max(due + every, time.monotonic() - every)
+        while not stopping() and time.monotonic() < due:
+            await asyncio.sleep(min(_BEAT_S, max(due - time.monotonic(), 0.0)))
+
+
+def _state_event(core: ConsoleCore) -> str:
+    return _event("state", core.state())

@@ -74,6 +74,17 @@ function drawStill(ctx, f, s) {
   ctx.fillText("drop-off", f.dropoff_left * s + 4, 14);
 }
 
+let still = null;  // the floor's still picture, drawn once per canvas size
+
+function stillPicture(canvas, f, s) {
+  if (!still || still.width !== canvas.width || still.height !== canvas.height) {
+    still = document.createElement("canvas");
+    still.width = canvas.width; still.height = canvas.height;
+    drawStill(still.getContext("2d"), f, s);
+  }
+  return still;
+}
+
 function drawFloor() {
   if (!view.floor || !view.state || view.floor.kind === "none") return;
   const canvas = $("floor");
@@ -82,7 +93,7 @@ function drawFloor() {
   const { s, h } = scale();
   const X = (x) => x * s;
   const Y = (y) => (h - y) * s;
-  drawStill(ctx, f, s);
+  ctx.drawImage(stillPicture(canvas, f, s), 0, 0);
   const tags = new Map(view.state.tags.map((t) => [t.marker, t]));
   ctx.setLineDash([4, 4]);
   ctx.strokeStyle = "#777";
@@ -95,6 +106,8 @@ function drawFloor() {
   ctx.setLineDash([]);
   const half = Math.max(5, (f.carrier_size * s) / 2);
   const drawn = [];
+  ctx.font = `bold ${Math.round(half * 1.2)}px sans-serif`;
+  ctx.textAlign = "center"; ctx.textBaseline = "middle";
   for (const t of view.state.tags) {
     if (!t.present || t.x === null) continue;
     ctx.fillStyle = t.status === "idle" ? "#bbb" : RAMP[t.urgency];
@@ -103,8 +116,6 @@ function drawFloor() {
     ctx.strokeStyle = t.marker === view.selected ? "#000" : t.overdue ? "#b00" : "#333";
     ctx.strokeRect(X(t.x) - half, Y(t.y) - half, 2 * half, 2 * half);
     ctx.fillStyle = t.urgency >= 7 || t.urgency <= 1 ? "#fff" : "#000";
-    ctx.font = `bold ${Math.round(half * 1.2)}px sans-serif`;
-    ctx.textAlign = "center"; ctx.textBaseline = "middle";
     ctx.fillText(String(t.urgency), X(t.x), Y(t.y));
     drawn.push(`${t.marker}:${t.urgency}`);
   }
@@ -138,11 +149,37 @@ function pickOnFloor(event) {
 }
 
 // ---- the table, the alerts, the selection ----------------------------------------------
-function cell(row, text, cls) {
-  const td = document.createElement("td");
-  td.textContent = text === null || text === undefined ? "–" : String(text);
-  if (cls) td.className = cls;
-  row.appendChild(td);
+const COLUMNS = ["marker", "urgency", "status", "destination", "last-heard", "carried-by", "waited"];
+const ALERTS_SHOWN = 20;  // the longest waits; the rest are counted
+const WINDOW_EXTRA = 10;  // rows made beyond each edge of the table's box
+const table = { rows: new Map(), order: "", alerts: "", rowPx: 0 };  // marker -> { tr, cells, texts }
+
+function cellTexts(t) {
+  return [t.marker, t.urgency, t.status, t.destination, t.last_heard,
+    t.carried_by === null ? "" : "robot " + t.carried_by,
+    t.delivered_at === null ? t.waited : "delivered"]
+    .map((v) => (v === null || v === undefined ? "–" : String(v)));
+}
+
+// A tag's row, made once and then only its changed cells rewritten: with a thousand tags
+// ten times a second, rebuilding every row would keep the browser from keeping up.
+function rowOf(t) {
+  let row = table.rows.get(t.marker);
+  if (!row) {
+    const tr = document.createElement("tr");
+    tr.dataset.marker = t.marker;
+    const cells = COLUMNS.map((name) => {
+      const td = document.createElement("td"); td.className = name; tr.appendChild(td); return td;
+    });
+    row = { tr, cells, texts: COLUMNS.map(() => null) };
+    table.rows.set(t.marker, row);
+  }
+  cellTexts(t).forEach((text, i) => {
+    if (row.texts[i] !== text) { row.cells[i].textContent = text; row.texts[i] = text; }
+  });
+  row.tr.classList.toggle("selected", t.marker === view.selected);
+  row.tr.classList.toggle("overdue", Boolean(t.overdue));
+  return row.tr;
 }
 
 function drawTable() {
@@ -156,31 +193,50 @@ function drawTable() {
     const order = va < vb ? -1 : va > vb ? 1 : a.marker - b.marker;
     return view.sortUp ? order : -order;
   });
-  const fresh = document.createDocumentFragment();
-  for (const t of rows) {
-    const tr = document.createElement("tr");
-    tr.dataset.marker = t.marker;
-    if (t.marker === view.selected) tr.classList.add("selected");
-    if (t.overdue) tr.classList.add("overdue");
-    cell(tr, t.marker, "marker"); cell(tr, t.urgency, "urgency"); cell(tr, t.status, "status");
-    cell(tr, t.destination, "destination"); cell(tr, t.last_heard, "last-heard");
-    cell(tr, t.carried_by === null ? "" : "robot " + t.carried_by, "carried-by");
-    cell(tr, t.delivered_at === null ? t.waited : "delivered", "waited");
-    fresh.appendChild(tr);
+  if (table.rows.size > view.state.tags.length) {  // forget the rows of tags gone
+    const present = new Set(view.state.tags.map((t) => t.marker));
+    for (const [marker, row] of table.rows) {
+      if (!present.has(marker)) { row.tr.remove(); table.rows.delete(marker); }
+    }
   }
-  body.replaceChildren(fresh);
+  // Only the rows in (and just beyond) the box are in the page; two padding rows stand for
+  // the rest, so that a thousand tags cost the layout of a few dozen rows.
+  const box = $("table-box");
+  const px = table.rowPx || 24;
+  const head = document.querySelector("#tags thead").offsetHeight;
+  const first = Math.max(0, Math.floor((box.scrollTop - head) / px) - WINDOW_EXTRA);
+  const shown = rows.slice(first, first + Math.ceil(box.clientHeight / px) + 2 * WINDOW_EXTRA);
+  const trs = shown.map(rowOf);
+  const order = `${first}/${rows.length}:` + shown.map((t) => t.marker).join(",");
+  if (order !== table.order) {
+    table.order = order;
+    $("pad-top").style.height = `${first * px}px`;
+    $("pad-bottom").style.height = `${(rows.length - first - shown.length) * px}px`;
+    body.replaceChildren($("pad-top"), ...trs, $("pad-bottom"));
+    if (!table.rowPx && trs.length) table.rowPx = trs[0].getBoundingClientRect().height || 24;
+  }
+  const count = $("tag-count");
+  count.dataset.total = String(view.state.tags.length);
+  count.textContent = needle ? `${rows.length} of ${view.state.tags.length} tags` : `${rows.length} tags`;
   document.querySelectorAll("#tags th").forEach((th) => {
     th.classList.toggle("sorted-up", th.dataset.key === k && view.sortUp);
     th.classList.toggle("sorted-down", th.dataset.key === k && !view.sortUp);
   });
-  const alerts = view.state.tags.filter((t) => t.overdue);
-  $("alerts").replaceChildren(...alerts.map((t) => {
-    const li = document.createElement("li");
-    li.dataset.marker = t.marker;
-    li.textContent = `carrier ${t.marker}: waiting ${Math.round(t.waited)} s (urgency ${t.urgency})`;
-    return li;
-  }));
-  if (!alerts.length) $("alerts").textContent = "none";
+  const overdue = view.state.tags.filter((t) => t.overdue).sort((a, b) => b.waited - a.waited);
+  const lines = overdue.slice(0, ALERTS_SHOWN).map((t) =>
+    [t.marker, `carrier ${t.marker}: waiting ${Math.round(t.waited)} s (urgency ${t.urgency})`]);
+  if (overdue.length > ALERTS_SHOWN) lines.push([null, `and ${overdue.length - ALERTS_SHOWN} more`]);
+  const key = lines.map(([, text]) => text).join("\n");
+  if (key !== table.alerts) {
+    table.alerts = key;
+    $("alerts").replaceChildren(...lines.map(([marker, text]) => {
+      const li = document.createElement("li");
+      if (marker !== null) li.dataset.marker = marker;
+      li.textContent = text;
+      return li;
+    }));
+    if (!lines.length) $("alerts").textContent = "none";
+  }
   const current = view.state.tags.find((t) => t.marker === view.selected);
   document.querySelectorAll("#urgency-buttons button").forEach((b) =>
     b.classList.toggle("current", current !== undefined && Number(b.dataset.urgency) === current.urgency));
@@ -256,6 +312,7 @@ async function control(change) {
 function showReplay(r) {
   $("replay-play").textContent = r.playing ? "pause" : "play";
   $("replay-play").dataset.playing = String(r.playing);
+  $("replay-play").disabled = false;  // enabled once the page knows whether it plays
   const slider = $("replay-slider");
   slider.max = String(r.duration);
   if (!view.sliding) slider.value = String(r.position);
@@ -274,12 +331,28 @@ function startReplay() {
   $("replay-speed").addEventListener("change", (e) => control({ speed: Number(e.target.value) }));
 }
 
+// States arrive ten times a second; the page draws the latest one at its next frame, so a
+// slow machine skips states rather than falling behind.
+let drawing = false;
+
 function showState(state) {
-  const s = state;
+  if (view.floor.source === "replay" && state.replay.version < view.version) return;  // stale
+  view.state = state;
+  redraw();
+}
+
+function redraw() {
+  if (drawing || !view.state) return;
+  drawing = true;
+  requestAnimationFrame(() => { drawing = false; drawState(); });
+}
+
+function drawState() {
+  const s = view.state;
   const source = view.floor.source;
+  if (source === "replay" && s.replay.version < view.version) return;  // a control came since
   if (source === "replay") {
     const r = s.replay;
-    if (r.version < view.version) return;  // sent before the last control took effect
     $("clock").textContent = `${view.floor.file} · ${r.condition} run ${s.run} (${r.segment + 1} of ${r.segments}) · t = ${s.time.toFixed(1)} s`;
     showReplay(r);
   } else if (source === "scan") {
@@ -288,7 +361,6 @@ function showState(state) {
   } else {
     $("clock").textContent = `run ${s.run} · t = ${s.time.toFixed(1)} s · ${view.floor.speed}× real time`;
   }
-  view.state = s;
   drawFloor(); drawTable();
 }
 
@@ -326,8 +398,9 @@ async function start() {
     drawTable();
   }));
   document.querySelector("#tags tbody").addEventListener("click", (e) => {
-    const tr = e.target.closest("tr"); if (tr) select(Number(tr.dataset.marker));
+    const tr = e.target.closest("tr[data-marker]"); if (tr) select(Number(tr.dataset.marker));
   });
+  $("table-box").addEventListener("scroll", redraw, { passive: true });
   canvas.addEventListener("click", pickOnFloor);
   const events = new EventSource("/api/events");
   events.addEventListener("open", () => { $("link").textContent = "live"; $("link").className = "ok"; });
