@@ -75,6 +75,10 @@ def test_the_floor_and_the_table_fill(page):
     sync_api.expect(page.locator("#kpi-deliveries")).not_to_have_text(
         "\u2013"
     )  # the dash shown before the first KPIs
+    # the overdue panel says something from the first state on: none, or the waits
+    sync_api.expect(page.locator("#alerts")).to_have_text(
+        re.compile(r"^(none|carrier \d+: waiting)")
+    )
     times = page.locator("#clock").text_content()
     sync_api.expect(page.locator("#clock")).not_to_have_text(times)  # it keeps moving
     _shot(page, "console.png")

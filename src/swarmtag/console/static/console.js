@@ -152,7 +152,7 @@ function pickOnFloor(event) {
 const COLUMNS = ["marker", "urgency", "status", "destination", "last-heard", "carried-by", "waited"];
 const ALERTS_SHOWN = 20;  // the longest waits; the rest are counted
 const WINDOW_EXTRA = 10;  // rows made beyond each edge of the table's box
-const table = { rows: new Map(), order: "", alerts: "", rowPx: 0 };  // marker -> { tr, cells, texts }
+const table = { rows: new Map(), order: "", alerts: null, rowPx: 0 };  // marker -> { tr, cells, texts }
 
 function cellTexts(t) {
   return [t.marker, t.urgency, t.status, t.destination, t.last_heard,
