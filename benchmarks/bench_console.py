@@ -197,6 +197,8 @@ def measure(args: argparse.Namespace, url: str) -> dict[str, Any]:
         now = server_time(base)
         bench = page.evaluate("() => window.__bench")
         rows = int(page.locator("#tag-count").get_attribute("data-total") or 0)
+        if args.screenshot:
+            page.screenshot(path=os.fspath(args.screenshot))
         browser.close()
     handling = [float(x) for x in bench["handling"]]
     drawing = [float(x) for x in bench["drawing"]]
@@ -229,6 +231,7 @@ def main() -> None:
     parser.add_argument("--rate", type=float, default=10.0, help="state events a second")
     parser.add_argument("--seconds", type=float, default=20.0, help="the measured window")
     parser.add_argument("--order-interval", type=float, default=0.2, help="seconds per order")
+    parser.add_argument("--screenshot", type=Path, help="save the page at the end (PNG)")
     parser.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--folder", help=argparse.SUPPRESS)
     parser.add_argument("--child-pid", type=int, help=argparse.SUPPRESS)
