@@ -1,25 +1,16 @@
-"""The page in a real browser: Playwright driving Debian's Chromium, headless.
+"""The page in a real browser: Playwright driving Debian's Chromium, headless (conftest.py)."""
 
-The browser is the system's (``/usr/bin/chromium``, or ``SWARMTAG_CHROMIUM``);
-Playwright never downloads one. Without it these tests fail with one line
-saying how to install it (``.ci/run`` does, as root).
-"""
-
-import os
 import re
 from pathlib import Path
 
 import pytest
 
+from tests.console.conftest import SCREENSHOTS
 from tests.console.server_process import start
 
 pytest.importorskip("uvicorn", reason="the console extra")  # installed by make test (dev)
 sync_api = pytest.importorskip("playwright.sync_api", reason="the dev extra")
 
-CHROMIUM = Path(os.environ.get("SWARMTAG_CHROMIUM", "/usr/bin/chromium"))
-HINT = f"the console's browser tests need Chromium at {CHROMIUM}: run 'apt-get install -y chromium' as root (or set SWARMTAG_CHROMIUM)"
-SCREENSHOTS = os.environ.get("SWARMTAG_CONSOLE_SCREENSHOTS")
-"""A folder to save the page's screenshots in (docs/console/ is made this way)."""
 UPDATE_MS = 3000
 """How long the table and the floor may take to show a write (a second when idle; CI is shared)."""
 
@@ -29,16 +20,6 @@ def console(tmp_path_factory):
     running = start(tmp_path_factory.mktemp("console"), "--speed", "2")
     yield running
     running.close()
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if not CHROMIUM.is_file():
-        pytest.fail(HINT, pytrace=False)
-    with sync_api.sync_playwright() as playwright:
-        chromium = playwright.chromium.launch(executable_path=str(CHROMIUM), headless=True)
-        yield chromium
-        chromium.close()
 
 
 @pytest.fixture

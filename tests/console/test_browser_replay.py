@@ -3,32 +3,22 @@
 Play/pause, the time slider and the speed change what the table (and, for
 an MCAP run, the floor) shows; a write is refused on the page with the
 server's reason. As ``test_browser.py``, without Chromium these tests fail
-with one line saying how to install it.
+with one line saying how to install it (conftest.py).
 """
 
 import re
 
 import pytest
 
+from tests.console.conftest import SCREENSHOTS
 from tests.console.recordings import simulate_mcap, write_log
 from tests.console.server_process import start
-from tests.console.test_browser import CHROMIUM, HINT, SCREENSHOTS
 
 pytest.importorskip("uvicorn", reason="the console extra")  # installed by make test (dev)
 sync_api = pytest.importorskip("playwright.sync_api", reason="the dev extra")
 
 UPDATE_MS = 3000
 """How long the page may take to show a new moment (it asks at once; CI is shared)."""
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if not CHROMIUM.is_file():
-        pytest.fail(HINT, pytrace=False)
-    with sync_api.sync_playwright() as playwright:
-        chromium = playwright.chromium.launch(executable_path=str(CHROMIUM), headless=True)
-        yield chromium
-        chromium.close()
 
 
 @pytest.fixture(scope="module")
@@ -61,20 +51,21 @@ def _open(browser, console):
     return context, page, errors
 
 
-@pytest.fixture
-def log_page(browser, log_console):
-    context, page, errors = _open(browser, log_console)
+def _page(browser, console):
+    context, page, errors = _open(browser, console)
     yield page
     context.close()
     assert errors == []
+
+
+@pytest.fixture
+def log_page(browser, log_console):
+    yield from _page(browser, log_console)
 
 
 @pytest.fixture
 def mcap_page(browser, mcap_console):
-    context, page, errors = _open(browser, mcap_console)
-    yield page
-    context.close()
-    assert errors == []
+    yield from _page(browser, mcap_console)
 
 
 def _statuses(page):

@@ -6,8 +6,8 @@ import re
 
 import pytest
 
+from tests.console.conftest import SCREENSHOTS
 from tests.console.server_process import start
-from tests.console.test_browser import CHROMIUM, HINT, SCREENSHOTS
 
 pytest.importorskip("uvicorn", reason="the console extra")  # installed by make test (dev)
 pytest.importorskip("bleak", reason="the ble extra")
@@ -15,18 +15,15 @@ sync_api = pytest.importorskip("playwright.sync_api", reason="the dev extra")
 
 
 @pytest.fixture
-def page(tmp_path):
-    if not CHROMIUM.is_file():
-        pytest.fail(HINT, pytrace=False)
+def page(tmp_path, browser):
     running = start(tmp_path, "--backend", "sim", source=("--scan",))
-    with sync_api.sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=str(CHROMIUM), headless=True)
-        page = browser.new_page(viewport={"width": 1280, "height": 800})
-        errors: list[str] = []
-        page.on("pageerror", lambda error: errors.append(str(error)))
-        page.goto(running.url)
-        yield page
-        browser.close()
+    context = browser.new_context(viewport={"width": 1280, "height": 800})
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    page.goto(running.url)
+    yield page
+    context.close()
     running.close()
     assert errors == []
 
