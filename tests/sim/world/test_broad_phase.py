@@ -193,7 +193,6 @@ def test_a_collision_pass_is_the_same_on_both_paths_and_as_before(seed):
     for ours in (dense, grid):
         assert np.array_equal(ours[0], before[0])
         assert np.array_equal(ours[1], before[1])
-        assert ours[2] == before[2]
 
 
 @pytest.mark.parametrize("seed", SEEDS)
