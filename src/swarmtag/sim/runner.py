@@ -172,7 +172,10 @@ def batch_result(
     stuck = (
         (state.status == TagStatus.PICKED_UP)
         & (state.carried_by >= 0)
-        & (np.take_along_axis(state.mode, np.maximum(state.carried_by, 0), axis=1) == Mode.BROKEN)
+        & (
+            np.take_along_axis(state.mode, np.maximum(state.carried_by, 0), axis=1)
+            == int(Mode.BROKEN)
+        )
     ).sum(axis=1)
     return SimResult(
         carriers=carrier_log(state, params, seed=seed),

@@ -66,11 +66,11 @@ class AdaptiveChooser(AllocatorChooser):
         del params, t, events
         alpha = self._alphas(s)
         was = in_modes(before.mode, PURSUIT_MODES)
-        gave_up = was & (s.mode == Mode.WALK)
+        gave_up = was & (s.mode == int(Mode.WALK))
         lost = gave_up & (own(s.known_status, before.target) != _AWAITING)
         gain = self.policy.gain
         alpha[lost] = np.maximum(ADAPTIVE_FLOOR, alpha[lost] * (1.0 - gain))
-        lifting = before.mode == Mode.LIFT  # set by the last tick's carry step
+        lifting = before.mode == int(Mode.LIFT)  # set by the last tick's carry step
         lifted = lifting if self._lifting is None else lifting & ~self._lifting
         self._lifting = lifting
         alpha[lifted] += gain * (ADAPTIVE_START - alpha[lifted])

@@ -157,7 +157,11 @@ class CbaaChooser(AllocatorChooser):
         lapsed = (winner >= 0) & (t - stamp > lease)
         clear = gone | lapsed
         bid[clear], winner[clear], stamp[clear] = -np.inf, _NONE, 0
-        pursuing = (s.mode == Mode.PREDOCK) | (s.mode == Mode.DOCK) | (s.mode == Mode.CENTRE)
+        pursuing = (
+            (s.mode == int(Mode.PREDOCK))
+            | (s.mode == int(Mode.DOCK))
+            | (s.mode == int(Mode.CENTRE))
+        )
         mine = pursuing & (own(winner, s.target) == me)
         stamp[rows, me, np.maximum(s.target, 0)] = np.where(
             mine, t, stamp[rows, me, np.maximum(s.target, 0)]
@@ -166,7 +170,7 @@ class CbaaChooser(AllocatorChooser):
         if t % every == 0:
             self._round(s, inputs, params)
             bid, winner, stamp, unreported, reported_at = self._tables()
-        approaching = (s.mode == Mode.PREDOCK) | (s.mode == Mode.DOCK)
+        approaching = (s.mode == int(Mode.PREDOCK)) | (s.mode == int(Mode.DOCK))
         outbid = approaching & (own(winner, s.target) != me)
         if outbid.any():
             heard = own(s.known_status, s.target).astype(np.float64)
@@ -196,7 +200,7 @@ class CbaaChooser(AllocatorChooser):
             msg = "cbaa: the tick's inputs carry no allocation draws"
             raise SimulationError(msg)
         robots = s.mode.shape[1]
-        working = s.mode != Mode.BROKEN
+        working = s.mode != int(Mode.BROKEN)
         sending = working & (winner >= 0).any(axis=-1)
         offset = s.robot_pos[:, :, None, :] - s.robot_pos[:, None, :, :]
         near = offset[..., 0] ** 2 + offset[..., 1] ** 2 <= self.policy.comm_range**2

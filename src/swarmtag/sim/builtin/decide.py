@@ -100,7 +100,7 @@ class Chooser(Protocol):
 def _pursuit_checks(
     s: WorldState, params: Params, t: int, events: TickEvents, *, told: bool = False
 ) -> None:
-    seeking = (s.mode == Mode.WALK) & (s.seek >= 0)
+    seeking = (s.mode == int(Mode.WALK)) & (s.seek >= 0)
     pursuing = in_modes(s.mode, PURSUIT_MODES) | seeking
     if not pursuing.any():
         return
@@ -150,7 +150,7 @@ def _face(
 
 def _switch_taken_faces(s: WorldState, params: Params) -> None:
     """Robots in PREDOCK whose point is taken move on to another free face not taken."""
-    approaching = s.mode == Mode.PREDOCK
+    approaching = s.mode == int(Mode.PREDOCK)
     if not (params.avoid_taken_faces and approaching.any()):
         return
     centre = at_robots(s.carrier_pos, s.target)
@@ -359,14 +359,14 @@ def decide(
     told = chooser is not None and chooser.global_knowledge
     _pursuit_checks(s, params, t, events, told=told)
     _switch_taken_faces(s, params)
-    walkers = (before.mode == Mode.WALK) & (s.mode == Mode.WALK)
+    walkers = (before.mode == int(Mode.WALK)) & (s.mode == int(Mode.WALK))
     _selection(
         s, senses=senses, walkers=walkers, inputs=inputs, params=params, t=t, events=events,
         chooser=chooser,
     )  # fmt: skip
 
     bumped = (s.contact != 0).any(axis=-1)
-    walking = s.mode == Mode.WALK
+    walking = s.mode == int(Mode.WALK)
     fresh = walking & (s.redirect | bumped)
     turning = walking
     if params.radio_search:
@@ -381,7 +381,7 @@ def decide(
         _turn_walk(s, turning & ~fresh, inputs.turn, params.walk_turn_ticks)
         s.walk_clock[fresh] = 0
 
-    unstick = (s.mode == Mode.TRANSPORT) & (s.stuck >= params.stuck_ticks) & (s.sidestep == 0)
+    unstick = (s.mode == int(Mode.TRANSPORT)) & (s.stuck >= params.stuck_ticks) & (s.sidestep == 0)
     if unstick.any():
         np.copyto(s.sidestep_dir, away_from(inputs.sidestep, s.contact), where=unstick[..., None])
         s.sidestep[unstick] = params.sidestep_ticks

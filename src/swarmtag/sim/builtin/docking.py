@@ -66,7 +66,7 @@ def _dock_free(s: WorldState, arriving: NDArray[np.bool_]) -> NDArray[np.bool_]:
 
 def arrive(before: WorldState, s: WorldState, *, params: Params, t: int) -> Arrivals:
     """The ``arrive`` step of tick ``t``: changes ``s`` in place, returns the requests."""
-    transporting = (s.mode == Mode.TRANSPORT) & (s.sidestep == 0)
+    transporting = (s.mode == int(Mode.TRANSPORT)) & (s.sidestep == 0)
     slow = length(s.robot_pos - before.robot_pos) < STUCK_PROGRESS * s.speed
     s.stuck[:] = np.where(transporting & slow, s.stuck + 1, 0)
 
@@ -78,17 +78,19 @@ def arrive(before: WorldState, s: WorldState, *, params: Params, t: int) -> Arri
     predock = centre + normal * params.predock_offset
     facing = (s.heading == -normal).all(axis=-1)
     at_predock = (
-        (s.mode == Mode.PREDOCK)
+        (s.mode == int(Mode.PREDOCK))
         & (length(s.robot_pos - predock) <= params.arrival_tolerance)
         & facing
     )
     at_predock &= _dock_free(s, at_predock)
-    at_centre = (s.mode == Mode.DOCK) & (length(s.robot_pos - centre) <= params.arrival_tolerance)
+    at_centre = (s.mode == int(Mode.DOCK)) & (
+        length(s.robot_pos - centre) <= params.arrival_tolerance
+    )
     s.mode[at_predock] = Mode.DOCK
     s.mode[at_centre] = Mode.CENTRE
     s.timer[at_centre] = params.dock_ticks
 
-    lift = (s.mode == Mode.CENTRE) & (s.timer == 0)
+    lift = (s.mode == int(Mode.CENTRE)) & (s.timer == 0)
     return Arrivals(drive_in=at_predock, centred=at_centre, lift=np.where(lift, s.target, -1))
 
 
@@ -98,7 +100,7 @@ def carry(s: WorldState, answers: LiftAnswers, *, params: Params, t: int) -> Car
     s.mode[answers.accepted] = Mode.LIFT
     s.timer[answers.accepted] = params.lift_ticks
 
-    raised = (s.mode == Mode.LIFT) & (s.timer == 0)
+    raised = (s.mode == int(Mode.LIFT)) & (s.timer == 0)
     if raised.any():
         s.mode[raised] = Mode.TRANSPORT
         s.stuck[raised] = 0
@@ -109,11 +111,11 @@ def carry(s: WorldState, answers: LiftAnswers, *, params: Params, t: int) -> Car
             goal = np.stack((np.full(y.shape, params.transport_x), y), axis=-1)
             np.copyto(s.goal, goal, where=raised[..., None])
 
-    arriving = (s.mode == Mode.TRANSPORT) & in_dropoff(s, params, s.target)
+    arriving = (s.mode == int(Mode.TRANSPORT)) & in_dropoff(s, params, s.target)
     s.mode[arriving] = Mode.RELEASE
     s.timer[arriving] = params.release_ticks
 
-    done = (s.mode == Mode.RELEASE) & (s.timer == 0)
+    done = (s.mode == int(Mode.RELEASE)) & (s.timer == 0)
     lower = np.where(done, s.target, -1)
     to_walk(s, done)
     return Carrying(raised=raised, lower=lower)

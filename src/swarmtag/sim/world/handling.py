@@ -55,7 +55,7 @@ ROBOT_WRITE_ALLOWED: Final = _transition_table()
 
 def break_down(s: WorldState, inputs: TickInputs, events: TickEvents) -> None:
     """Robots whose breakdown number fired this tick break down for good (in place)."""
-    broken = inputs.breakdown & (s.mode != Mode.BROKEN)
+    broken = inputs.breakdown & (s.mode != int(Mode.BROKEN))
     if not broken.any():
         return
     loaded = is_loaded(s.mode, s.target)

@@ -126,7 +126,7 @@ def actionable(state: WorldState, known_status: NDArray[np.int8]) -> NDArray[np.
 
     Only these sightings can make a candidate when there is no sighting memory.
     """
-    walking = (state.mode == Mode.WALK)[..., None]
+    walking = (state.mode == int(Mode.WALK))[..., None]
     awaiting: NDArray[np.bool_] = walking & (known_status == TagStatus.AWAITING_PICKUP)
     return awaiting
 
@@ -314,7 +314,7 @@ def looked(
     ``seen``: the sightings' positions and where the robots believe they stand).
     """
     seen_pos, believed = seen
-    looking = ((state.look >= 0) & (state.mode == Mode.WALK))[..., None]
+    looking = ((state.look >= 0) & (state.mode == int(Mode.WALK)))[..., None]
     if not looking.any():
         return known, measured
     window = looking & (seen_tick >= state.look[..., None]) & state.present[:, None, :]
