@@ -11,7 +11,9 @@ Side by side in one run:
   code's ``summarize`` of the same log);
 - whole ``swarmtag simulate`` calls in fresh processes (``--robots 20 --carriers 40 --runs
   100``, two conditions; and the default call), split into simulation and statistics, and
-  the same calls run by that code, alternately with this one;
+  the same calls run by that code, alternately with this one; the 20/40 call also alternately
+  with its simulations run warm in this process (the ratio of the medians: at most 2 is the
+  target);
 - importing ``scipy.stats`` (which the Mann-Whitney test loads) in a fresh process.
 
 Usage:
@@ -220,18 +222,35 @@ def probe(arguments: list[str], source: Path | None) -> dict[str, float]:
     return {"wall_s": wall, **parts}
 
 
+def warm_simulations() -> float:
+    """Seconds for issue 34's 20/40 call's simulations in this (warm) process: 2 x 100 runs."""
+    scenario = load_profile("paper-sim").scenario({"robots": 20, "carriers": 40})
+    began = time.perf_counter()
+    for name in ("proximity", "urgency:alpha=0.7"):
+        simulate(scenario, parse_policy(name), seed=0, runs=100, backend="fast")
+    return time.perf_counter() - began
+
+
 def whole_calls(record: Record, args: argparse.Namespace) -> None:
-    """The CLI calls of ``CLI_CALLS``, this code and (``--old-src``) the other, alternately."""
+    """The CLI calls of ``CLI_CALLS``, this code and (``--old-src``) the other, alternately.
+
+    The 20/40 call alternates with its own simulations run warm in this process
+    (``warm_simulations``): the ratio of the medians is the issue's target (at most 2).
+    """
     sources: dict[str, Path | None] = {"this": None}
     if args.old_src is not None:
         sources["old"] = args.old_src
+    warm_simulations()  # the kernel loaded here
     for name, arguments in CLI_CALLS.items():
         for source in sources.values():
             probe(arguments, source)  # caches warm (the compiled kernels, the files)
         samples: dict[str, list[dict[str, float]]] = {code: [] for code in sources}
+        warm: list[float] = []
         for _ in range(args.cli_repeat):
             for code, source in sources.items():
                 samples[code].append(probe(arguments, source))
+            if name == "20x40":
+                warm.append(warm_simulations())
         for code, runs in samples.items():
             parts = {key: statistics.median(run[key] for run in runs) for key in runs[0]}
             label = f"swarmtag {' '.join(arguments)} ({code} code)"
@@ -241,6 +260,13 @@ def whole_calls(record: Record, args: argparse.Namespace) -> None:
                 f"{parts['statistics_s']:.3f} s (summarize {parts['summarize_s']:.3f} s)"
             )
             record.summary[f"cli_{name}_{code}"] = parts
+        if warm:
+            report(record, "  its simulations, warm in this process", warm)
+            ratio = statistics.median(run["wall_s"] for run in samples["this"]) / statistics.median(
+                warm
+            )
+            record.summary["cli_20x40_over_warm_simulations"] = ratio
+            print(f"    the whole call / its warm simulations (medians): {ratio:.2f} (target 2)")
 
 
 def scipy_import(record: Record, repeat: int) -> None:
