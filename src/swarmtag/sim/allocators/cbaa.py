@@ -42,7 +42,7 @@ from swarmtag.sim.allocators.base import AllocatorChooser
 from swarmtag.sim.builtin.decide import Selection
 from swarmtag.sim.model.events import EventKind, TickEvents
 from swarmtag.sim.model.geometry import Float
-from swarmtag.sim.model.indexing import grid, own, to_walk
+from swarmtag.sim.model.indexing import PURSUIT_MODES, grid, in_modes, own, to_walk
 from swarmtag.sim.model.params import Params
 from swarmtag.sim.model.randomness import TickInputs
 from swarmtag.sim.model.state import Int, Mode, WorldState
@@ -157,11 +157,7 @@ class CbaaChooser(AllocatorChooser):
         lapsed = (winner >= 0) & (t - stamp > lease)
         clear = gone | lapsed
         bid[clear], winner[clear], stamp[clear] = -np.inf, _NONE, 0
-        pursuing = (
-            (s.mode == int(Mode.PREDOCK))
-            | (s.mode == int(Mode.DOCK))
-            | (s.mode == int(Mode.CENTRE))
-        )
+        pursuing = in_modes(s.mode, PURSUIT_MODES)
         mine = pursuing & (own(winner, s.target) == me)
         stamp[rows, me, np.maximum(s.target, 0)] = np.where(
             mine, t, stamp[rows, me, np.maximum(s.target, 0)]
@@ -170,7 +166,7 @@ class CbaaChooser(AllocatorChooser):
         if t % every == 0:
             self._round(s, inputs, params)
             bid, winner, stamp, unreported, reported_at = self._tables()
-        approaching = (s.mode == int(Mode.PREDOCK)) | (s.mode == int(Mode.DOCK))
+        approaching = in_modes(s.mode, (Mode.PREDOCK, Mode.DOCK))
         outbid = approaching & (own(winner, s.target) != me)
         if outbid.any():
             heard = own(s.known_status, s.target).astype(np.float64)
