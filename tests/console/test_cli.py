@@ -125,7 +125,6 @@ def test_bad_sources_are_one_line_and_exit_2(tmp_path, args, says):
 def test_scan_without_an_adapter_is_one_line(tmp_path, monkeypatch, capsys):
     """bleak's scanner fails as on a machine with no adapter: exit 2, nothing written."""
     pytest.importorskip("bleak", reason="the ble extra")
-    from swarmtag.cli import main
     from swarmtag.tag.backends import bleak as bleak_backend
 
     class NoAdapter:
@@ -139,16 +138,23 @@ def test_scan_without_an_adapter_is_one_line(tmp_path, monkeypatch, capsys):
             pass
 
     monkeypatch.setattr(bleak_backend.bleak, "BleakScanner", NoAdapter)
-    monkeypatch.chdir(tmp_path)
+    assert _scan_refused(tmp_path, monkeypatch, capsys) == (
+        "swarmtag: error: --scan: no Bluetooth adapter found: plug in a BLE adapter and "
+        "check 'bluetoothctl list'"
+    )
+
+
+def _scan_refused(folder, monkeypatch, capsys):
+    """``console --scan`` run in ``folder``: exit 2, nothing written there; its one stderr line."""
+    from swarmtag.cli import main
+
+    monkeypatch.chdir(folder)
     with pytest.raises(SystemExit) as ended:
         main(["console", "--scan", "--port", "0"])
     assert ended.value.code == 2
     (line,) = capsys.readouterr().err.strip().splitlines()
-    assert line == (
-        "swarmtag: error: --scan: no Bluetooth adapter found: plug in a BLE adapter and "
-        "check 'bluetoothctl list'"
-    )
-    assert list(tmp_path.iterdir()) == []
+    assert list(folder.iterdir()) == []
+    return line
 
 
 def test_scan_bounds_the_wait_for_the_scanner_thread_at_ctrl_c(tmp_path, monkeypatch, capsys):
@@ -174,21 +180,13 @@ def test_scan_bounds_the_wait_for_the_scanner_thread_at_ctrl_c(tmp_path, monkeyp
 def test_scan_without_bleak_is_one_line(tmp_path, monkeypatch, capsys):
     import sys
 
-    from swarmtag.cli import main
-
     monkeypatch.setitem(sys.modules, "bleak", None)
     monkeypatch.delitem(sys.modules, "swarmtag.tag.backends.bleak_writer", raising=False)
     monkeypatch.delitem(sys.modules, "swarmtag.tag.backends.bleak", raising=False)
-    monkeypatch.chdir(tmp_path)
-    with pytest.raises(SystemExit) as ended:
-        main(["console", "--scan", "--port", "0"])
-    assert ended.value.code == 2
-    (line,) = capsys.readouterr().err.strip().splitlines()
-    assert line == (
+    assert _scan_refused(tmp_path, monkeypatch, capsys) == (
         "swarmtag: error: console --scan needs the bleak package, which is not installed: "
         "pip install 'swarmtag[ble]'"
     )
-    assert list(tmp_path.iterdir()) == []
 
 
 def test_replay_serves_the_file_and_refuses_writes(tmp_path):
