@@ -11,6 +11,7 @@ from swarmtag.sim.model.geometry import (
     FACE_NORMALS,
     clamp_to_box,
     contact_push,
+    contact_xy,
     length,
     ordered_sum,
     step_towards,
@@ -49,6 +50,22 @@ def test_disc_near_a_square_corner_is_pushed_along_the_diagonal():
     assert float(depth) == pytest.approx(expected)
     assert push[0] == pytest.approx(push[1])
     assert float(length(push)) == pytest.approx(expected)
+
+
+def test_pairs_outside_the_summed_box_get_the_same_bits_alone_as_beside_an_inside_one():
+    # contact_xy takes a shorter path when every centre lies outside the summed box
+    rng = np.random.default_rng(9)
+    dx, dy = rng.uniform(-0.6, 0.6, (2, 300))
+    extent = np.where(rng.random(300) < 0.5, 0.1775, 0.0)
+    radius = np.full(300, 0.125)
+    outside = (np.abs(dx) > extent) | (np.abs(dy) > extent)
+    dx, dy, extent, radius = dx[outside], dy[outside], extent[outside], radius[outside]
+    assert (contact_xy(dx, dy, extent, radius, 1.0)[2] > 0).any()  # some touch, some do not
+    inside = [np.append(v, centre) for v, centre in ((dx, 0.01), (dy, 0.0), (extent, 0.1775))]
+    alone = contact_xy(dx, dy, extent, radius, 1.0)
+    beside = contact_xy(*inside, np.append(radius, 0.125), 1.0)
+    for ours, theirs in zip(alone, beside, strict=True):
+        assert ours.tobytes() == theirs[:-1].tobytes()
 
 
 def test_contact_push_is_antisymmetric():

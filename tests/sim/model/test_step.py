@@ -57,6 +57,18 @@ def _inputs(params, runs=1):
     return TickInputs.fixed(runs, params.robots, walk=[(1.0, 0.0)] * 3 + [(1.0, 0.0), (-1.0, 0.0)])
 
 
+def test_a_copy_has_fresh_arrays_and_takes_the_changes_it_is_given():
+    _, state = _busy(runs=2)
+    rssi = np.full_like(state.rssi, 2.5)
+    copied = state.copy(tick=9, rssi=rssi)
+    assert copied.tick == 9
+    assert copied.rssi is rssi
+    for name, array in _arrays(state).items():
+        if name != "rssi":
+            np.testing.assert_array_equal(getattr(copied, name), array, err_msg=name)
+            assert not np.shares_memory(getattr(copied, name), array), name
+
+
 @pytest.mark.parametrize("ended_at", [[-1, -1], [3, -1]], ids=["running", "one-run-ended"])
 def test_step_leaves_the_state_it_is_given_untouched(ended_at):
     params, state = _busy(runs=2)

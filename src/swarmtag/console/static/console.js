@@ -336,7 +336,12 @@ function startReplay() {
 let drawing = false;
 
 function showState(state) {
-  if (view.floor.source === "replay" && state.replay.version < view.version) return;  // stale
+  if (view.floor.source === "replay") {
+    // A state older than one already shown is stale: an answer to an earlier control can
+    // arrive after the stream has brought the next control's moment.
+    if (state.replay.version < view.version) return;
+    view.version = state.replay.version;
+  }
   view.state = state;
   redraw();
 }

@@ -82,7 +82,8 @@ def arrive(before: WorldState, s: WorldState, *, params: Params, t: int) -> Arri
         & (length(s.robot_pos - predock) <= params.arrival_tolerance)
         & facing
     )
-    at_predock &= _dock_free(s, at_predock)
+    if at_predock.any():  # most ticks nobody arrives: nobody to check
+        at_predock &= _dock_free(s, at_predock)
     at_centre = (s.mode == int(Mode.DOCK)) & (
         length(s.robot_pos - centre) <= params.arrival_tolerance
     )

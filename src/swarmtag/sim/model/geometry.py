@@ -117,6 +117,14 @@ def contact_xy(
     distance = np.sqrt(out_x * out_x + out_y * out_y)
     outside = distance > 0
     depth_outside = radius - distance
+    if outside.all():  # no centre inside the summed box (nearly every contact): the same values
+        hit_outside = depth_outside > 0
+        ratio = depth_outside / distance
+        return (
+            np.where(hit_outside, out_x * ratio, 0.0),
+            np.where(hit_outside, out_y * ratio, 0.0),
+            depth_outside,
+        )
     scale = np.divide(depth_outside, distance, out=np.zeros_like(distance), where=outside)
 
     overlap_x = extent + radius - np.abs(dx)

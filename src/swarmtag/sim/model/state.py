@@ -184,14 +184,19 @@ class WorldState:
         """Number of runs in the batch."""
         return int(self.run_ids.shape[0])
 
-    def copy(self) -> WorldState:
-        """The same state with fresh copies of every array."""
-        arrays = {
-            f.name: getattr(self, f.name).copy()
-            for f in fields(self)
-            if isinstance(getattr(self, f.name), np.ndarray)
+    def copy(self, **changes: Any) -> WorldState:  # noqa: ANN401 - any field's value
+        """The same state with fresh copies of every array; the fields in ``changes`` set instead.
+
+        One construction, and no copy of an array that ``changes`` replaces:
+        the reference copies the state once a tick.
+        """
+        values: dict[str, Any] = {
+            name: value.copy() if isinstance(value, np.ndarray) else value
+            for name in _FIELD_NAMES
+            if name not in changes
+            for value in (getattr(self, name),)
         }
-        return replace(self, **arrays)
+        return WorldState(**values, **changes)
 
     def select_runs(self, rows: ArrayLike) -> WorldState:
         """The state of some runs only (by position in the batch), as a new batch."""
@@ -202,6 +207,10 @@ class WorldState:
             if isinstance(getattr(self, f.name), np.ndarray)
         }
         return replace(self, **arrays)
+
+
+_FIELD_NAMES: tuple[str, ...] = tuple(f.name for f in fields(WorldState))
+"""``WorldState``'s fields, in order (``fields`` walks the class on every call)."""
 
 
 def _array(name: str, value: ArrayLike, shape: tuple[int, ...], dtype: type) -> NDArray[Any]:

@@ -72,33 +72,34 @@ def move(s: WorldState, params: Params) -> Float:
     Turns headings and counts down sidesteps in place.
     """
     mode, pos, speed = s.mode, s.robot_pos, s.speed
-    if params.floor is not None:
-        carrying = mode == int(Mode.TRANSPORT)
-        if carrying.any():
-            destination = at_robots(s.destination, s.target)
-            waypoint = transport_waypoints(pos, destination, params.floor)
-            np.copyto(s.goal, waypoint, where=carrying[..., None])
+    walking = mode == int(Mode.WALK)
+    approaching = mode == int(Mode.PREDOCK)
+    carrying = mode == int(Mode.TRANSPORT)
+    if params.floor is not None and carrying.any():
+        destination = at_robots(s.destination, s.target)
+        waypoint = transport_waypoints(pos, destination, params.floor)
+        np.copyto(s.goal, waypoint, where=carrying[..., None])
     centre = at_robots(s.carrier_pos, s.target)
     normal = FACE_NORMALS[np.maximum(s.face, 0)]
     predock = centre + normal * params.predock_offset
     goal = np.where(
-        (mode == int(Mode.PREDOCK))[..., None],
+        approaching[..., None],
         predock,
         np.where((mode == int(Mode.DOCK))[..., None], centre, s.goal),
     )
     driving = in_modes(mode, (Mode.PREDOCK, Mode.DOCK, Mode.TRANSPORT))
-    sidestepping = (mode == int(Mode.TRANSPORT)) & (s.sidestep > 0)
+    sidestepping = carrying & (s.sidestep > 0)
     towards = step_towards(pos, goal, speed)
     walked = pos + s.walk * speed[..., None]
     walk_facing = s.walk
     if params.look_ticks > 0:  # looking round: stand and turn counter-clockwise
-        looking = ((mode == int(Mode.WALK)) & (s.look >= 0))[..., None]
+        looking = (walking & (s.look >= 0))[..., None]
         walked = np.where(looking, pos, walked)
         left = np.stack((-s.heading[..., 1], s.heading[..., 0]), axis=-1)
         walk_facing = np.where(looking, left, s.walk)
     sidestep = pos + s.sidestep_dir * speed[..., None]
     proposed = np.where(
-        (mode == int(Mode.WALK))[..., None],
+        walking[..., None],
         walked,
         np.where(sidestepping[..., None], sidestep, np.where(driving[..., None], towards, pos)),
     )
@@ -109,15 +110,11 @@ def move(s: WorldState, params: Params) -> Float:
     safe = np.where(distance > 0, distance, 1.0)
     direction = travel / safe[..., None]
     facing = np.where(
-        (mode == int(Mode.PREDOCK))[..., None],
+        approaching[..., None],
         -normal,
-        np.where((mode == int(Mode.WALK))[..., None], walk_facing, direction),
+        np.where(walking[..., None], walk_facing, direction),
     )
-    turning = (
-        (mode == int(Mode.PREDOCK))
-        | (mode == int(Mode.WALK))
-        | ((mode == int(Mode.TRANSPORT)) & (distance > 0))
-    )
+    turning = approaching | walking | (carrying & (distance > 0))
     if turning.any():
         turned = turn_towards(s.heading, facing, params.turn_cos, params.turn_sin)
         np.copyto(s.heading, turned, where=turning[..., None])

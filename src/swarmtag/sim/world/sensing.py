@@ -34,7 +34,7 @@ updates the robot's running distance estimate of that tag from its RSSI
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
@@ -341,16 +341,18 @@ def ranged(
 
 def sensed_state(state: WorldState, senses: Senses) -> WorldState:
     """A copy of ``state`` as tick ``state.tick + 1`` begins, with the caches of ``senses``."""
-    copied = state.copy()
-    return replace(
-        copied,
+    changes: dict[str, object] = {}
+    if senses.rssi is not None:
+        changes["rssi"] = senses.rssi
+    if senses.odometry is not None:
+        changes["odometry"] = senses.odometry
+        changes["odometry_at"] = state.robot_pos.copy()
+    return state.copy(
         tick=state.tick + 1,
         known_status=senses.known_status,
         known_urgency=senses.known_urgency,
         heard_tick=senses.heard_tick,
         seen_tick=senses.seen_tick,
         seen_pos=senses.seen_pos,
-        rssi=copied.rssi if senses.rssi is None else senses.rssi,
-        odometry=copied.odometry if senses.odometry is None else senses.odometry,
-        odometry_at=copied.odometry_at if senses.odometry is None else state.robot_pos.copy(),
+        **changes,
     )
