@@ -9,6 +9,7 @@ import numpy as np
 from swarmtag.policy import Policy
 from swarmtag.sim import Scenario, SimResult, WorldState, simulate
 from swarmtag.sim.determinism import run_csv
+from swarmtag.sim.outputs.trajectories import Trajectories
 
 TAG_CACHES = (
     "blocked_until",
@@ -39,6 +40,16 @@ def assert_same(reference: SimResult, fast: SimResult) -> None:
             assert np.array_equal(ours, theirs, equal_nan=True), field.name
     for name in ("delivered", "undelivered", "stuck", "breakdowns", "end_tick"):
         assert getattr(reference, name).tolist() == getattr(fast, name).tolist(), name
+    assert (reference.trajectories is None) == (fast.trajectories is None)
+    if reference.trajectories is not None and fast.trajectories is not None:
+        for field in fields(Trajectories):
+            ours = getattr(reference.trajectories, field.name)
+            theirs = getattr(fast.trajectories, field.name)
+            if isinstance(ours, np.ndarray):
+                assert ours.dtype == theirs.dtype, field.name
+                assert ours.tobytes() == theirs.tobytes(), field.name
+            else:
+                assert ours == theirs, field.name
 
 
 def compare(
@@ -50,7 +61,7 @@ def compare(
     run_offset: int = 0,
     **options: object,
 ) -> SimResult:
-    """Run both backends on the same runs, assert they agree; the fast result."""
+    """Run both backends on the same runs, assert they agree (trajectories too); the fast result."""
     reference = simulate(
         scenario,
         policy,

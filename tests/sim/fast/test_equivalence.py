@@ -206,7 +206,11 @@ def test_hundreds_of_runs_agree():
     assert result.delivered.sum() > 0
 
 
-@pytest.mark.parametrize("scenario", [PAPER, CASES["warehouse"]], ids=["lab", "warehouse"])
+@pytest.mark.parametrize(
+    "scenario",
+    [PAPER, CASES["warehouse"], CASES["reprioritised"]],
+    ids=["lab", "warehouse", "reprioritised"],
+)
 def test_recorded_and_checked_runs_agree(scenario):
     reference = compare(scenario, Urgency(alpha=3.0), seed=2, runs=2, record=True, check=True)
     assert reference.trajectories is not None

@@ -370,13 +370,13 @@ class _Batch:
         """The batch's arrays as a ``WorldState`` (no copy)."""
         return state_of(self.world, self.template)
 
-    def write(self, current: WorldState, t: int, tick_events: TickEvents | None) -> None:
+    def write(self, t: int, tick_events: TickEvents | None) -> None:
         """Apply the operator writes due at tick ``t`` (every running run is at ``t``)."""
         writes = due_writes(self.params, t)
         if not writes:
             return
         done = TickEvents()
-        operator_writes(current, writes, t=t, events=done)
+        operator_writes(self.state(), writes, t=t, events=done)
         for event in done.carrier_entries:
             self.events.add_rows(
                 np.array([event.run]),
@@ -434,6 +434,9 @@ def simulate_fast(
     )
     position = start
     current = state
+    # The batch's arrays as a state, made once: the kernel writes them in place, so this
+    # view shows every tick (all but its ``tick``, which recording does not read).
+    view = batch.state() if trajectories is not None else None
     try:
         while position < end and (batch.world.ended_at < 0).any():
             checkpoint()  # Ctrl-C between kernel calls
@@ -441,17 +444,19 @@ def simulate_fast(
             stop = min([stop, *(t for t in write_ticks if t > position)])
             before = current.copy() if check else None
             batch.advance_to(stop, batch.streams.outside(stop - position), position + 1)
-            current = batch.state()
             tick_events = (
                 _tick_events(batch.scratch, (state.runs, params.robots)) if check else None
             )
-            batch.write(current, stop, tick_events)
+            batch.write(stop, tick_events)
             batch.flush()
             if before is not None and tick_events is not None:
+                current = batch.state()
                 check_tick(before, current, tick_events, params)
-            if trajectories is not None:
-                trajectories.add(current)
+            if trajectories is not None and view is not None:
+                trajectories.add(view)
             position = stop
     finally:
         batch.close()
+    if position != start:
+        current = batch.state()
     return current, batch.events, batch.breakdowns, trajectories
