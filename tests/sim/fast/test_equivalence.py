@@ -176,14 +176,19 @@ takes seconds per run in the reference backend, and the scene does not depend on
 so four policies test four scenes."""
 
 
+SEED, RUNS, OFFSET = 11, 4, 3
+"""The runs each case compares (``RUNS`` from run ``OFFSET`` of seed ``SEED``), but
+``ONE_RUN_EACH``; ``test_tag_cache`` compares its sparse caches on the same runs."""
+
+
 @pytest.mark.parametrize("policy", POLICIES, ids=lambda p: p.name)
 @pytest.mark.parametrize("case", list(CASES))
 def test_backends_agree(case, policy):
-    runs, offset = 4, 3
+    runs, offset = RUNS, OFFSET
     if case in ONE_RUN_EACH:
         runs = ONE_RUN_EACH[case]
         offset += POLICIES.index(policy) * runs
-    fast = compare(CASES[case], policy, seed=11, runs=runs, run_offset=offset)
+    fast = compare(CASES[case], policy, seed=SEED, runs=runs, run_offset=offset)
     missing = EVENTS[case] - set(fast.events.kind.tolist())
     assert not missing, f"{case}: no {sorted(missing)} in the compared runs: too short?"
     if case in ENDING:
