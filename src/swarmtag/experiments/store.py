@@ -218,7 +218,7 @@ class ResultsStore:
         as ``simulate`` returns them. A run already stored under the same key
         is a ``StoreError`` (the runner only computes missing runs).
         """
-        conditions = set(carriers.condition.tolist())
+        conditions = set(carriers.condition.tolist()) | set(events.condition.tolist())
         if len(conditions) != 1:
             msg = f"write_chunk: a chunk holds one condition, got {sorted(conditions)}"
             raise StoreError(msg)
@@ -234,7 +234,8 @@ class ResultsStore:
         carrier_rows = _positions(carriers.run)
         event_rows = _positions(events.run)
         carrier_frame = {
-            **_key_frame(key, carriers, carrier_rows),
+            "run": carriers.run,
+            "row": carrier_rows,
             "carrier": carriers.carrier,
             "urgency0": carriers.urgency0,
             "order_time": carriers.order_time,
@@ -245,7 +246,8 @@ class ResultsStore:
             "urgency_end": _nullable_ids(carriers.urgency_end),
         }
         event_frame = {
-            **_key_frame(key, events, event_rows),
+            "run": events.run,
+            "row": event_rows,
             "time": events.time,
             "kind": events.kind,
             "carrier": _nullable_ids(events.carrier),
@@ -269,18 +271,23 @@ class ResultsStore:
                 "FROM chunk_runs",
                 [*prefix, key.seed, key.code_version, carriers.time_unit],
             )
+            # The key's constant columns are parameters, not per-row columns of the frames:
+            # DuckDB reads a numpy string column value by value.
+            keys = [*prefix, key.seed, key.code_version]
             con.execute(
                 "INSERT INTO carriers (study, scale, condition, seed, run, code_version, "
                 '"row", carrier, urgency0, order_time, pickup_time, delivery_time, robot, '
                 "run_end, urgency_end) "
-                "SELECT study, scale, condition, seed, run, code_version, "
+                "SELECT ?, ?, ?, ?, run, ?, "
                 '"row", carrier, urgency0, order_time, pickup_time, delivery_time, '
-                "CAST(robot AS BIGINT), run_end, CAST(urgency_end AS BIGINT) FROM chunk_carriers"
+                "CAST(robot AS BIGINT), run_end, CAST(urgency_end AS BIGINT) FROM chunk_carriers",
+                keys,
             )
             con.execute(
-                "INSERT INTO events SELECT study, scale, condition, seed, run, code_version, "
+                "INSERT INTO events SELECT ?, ?, ?, ?, run, ?, "
                 '"row", time, kind, CAST(carrier AS BIGINT), CAST(robot AS BIGINT), value '
-                "FROM chunk_events"
+                "FROM chunk_events",
+                keys,
             )
             con.execute("COMMIT")
         except duckdb.ConstraintException as error:
@@ -402,22 +409,6 @@ def export_logs(
     write_event_log(log, carriers_path)
     write_event_table(events, events_path)
     return carriers_path, events_path
-
-
-def _key_frame(
-    key: RunKey, table: CarrierLog | EventTable, rows: np.ndarray[Any, Any]
-) -> dict[str, Any]:
-    """The key columns of every stored row of ``table`` (carriers and events alike)."""
-    n = len(table)
-    return {
-        "study": np.full(n, key.study),
-        "scale": np.full(n, key.scale),
-        "condition": table.condition,
-        "seed": np.full(n, key.seed, dtype=np.int64),
-        "run": table.run,
-        "code_version": np.full(n, key.code_version),
-        "row": rows,
-    }
 
 
 def _positions(run: np.ndarray[Any, Any]) -> np.ndarray[Any, Any]:
