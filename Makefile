@@ -14,18 +14,18 @@ DEMO_STAMP := $(VENV)/.installed-demo
 # The package's bytecode is written once at the install (compileall writes it even where
 # PYTHONDONTWRITEBYTECODE is set): every swarmtag command, and each one the tests start, then
 # reads it instead of compiling the sources again (a quarter second a command).
-# The fast simulation kernel is compiled once per machine (about 90 s per entry point on
-# one core). It starts in the background as soon as numba is installed, so that it overlaps
-# the rest of the install (and, for make test, ruff and mypy); `demo` and `unit` wait for it.
-# Entry points: batched (every command) and split (one run over threads; the tests); then
+# The fast simulation kernel is compiled once per machine (about 70 s on one core for its
+# first entry point). It starts in the background as soon as numba is installed, so that it
+# overlaps the rest of the install (and, for make test, ruff and mypy); `demo` and `unit` wait
+# for it. Entry points: batched (every command) and split (one run over threads; the tests),
+# which starts once batched has cached the code they share (tests/kernel_warmup.py); and
 # statistics, the bootstrap's compiled loops (a few seconds, on the core the kernel leaves).
 define install_with_warmup
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install -e '.[fast]'
 	@echo "make: compiling the fast simulation kernel ($(1)) in the background; log: $(WARMUP_LOG)"
-	@( for entry in $(1); do $(BIN)/python -m tests.kernel_warmup $$entry & done; wait ) \
-		> $(WARMUP_LOG) 2>&1 & echo $$! > $(WARMUP_PID)
+	@$(BIN)/python -m tests.kernel_warmup $(1) > $(WARMUP_LOG) 2>&1 & echo $$! > $(WARMUP_PID)
 	$(BIN)/python -m compileall -q src
 endef
 

@@ -1,7 +1,7 @@
 """Shared test configuration: Hypothesis profiles, the opt-in ``--radio`` tests, a locked folder.
 
 Before any test, the fast kernel's two entry points and the bootstrap's
-compiled loops are compiled (or loaded) at once in three processes
+compiled loops are compiled (or loaded) side by side in three processes
 (``tests/kernel_warmup.py``).
 """
 
@@ -66,20 +66,16 @@ def _compile_kernel(config: pytest.Config) -> None:
     if hasattr(config, "workerinput") or importlib.util.find_spec("numba") is None:
         return
     root = Path(__file__).resolve().parent.parent
-    processes = [
-        subprocess.Popen(
-            [sys.executable, "-m", "tests.kernel_warmup", entry],
-            cwd=root,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-        )
-        for entry in ENTRIES
-    ]
-    outputs = [process.communicate()[0] for process in processes]
-    failed = [out for out, process in zip(outputs, processes, strict=True) if process.returncode]
-    if failed:
-        raise pytest.UsageError("compiling the fast kernel failed:\n" + "\n".join(failed))
+    process = subprocess.run(
+        [sys.executable, "-m", "tests.kernel_warmup", *ENTRIES],
+        cwd=root,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        check=False,
+    )
+    if process.returncode:
+        raise pytest.UsageError("compiling the fast kernel failed:\n" + process.stdout)
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

@@ -58,7 +58,7 @@ from swarmtag.sim.fast._docking import (
 from swarmtag.sim.fast._draws import DRAW_CHUNK, chunk_end, draw_range, draw_units
 from swarmtag.sim.fast._events import room_for_tick
 from swarmtag.sim.fast._index import copy_to_slots, index_robots
-from swarmtag.sim.fast._jit import entry, inlined
+from swarmtag.sim.fast._jit import entry, glue, inlined
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._scratch import Scratch
 from swarmtag.sim.fast._sync import (
@@ -193,7 +193,7 @@ def _draw_rest(
     return True
 
 
-@inlined
+@glue
 def _first_pass(
     part: int,
     parts: int,
@@ -222,7 +222,7 @@ def _first_pass(
     return count
 
 
-@inlined
+@glue
 def _settle(
     part: int,
     parts: int,

@@ -29,7 +29,7 @@ from swarmtag.sim.fast._docking import (
 from swarmtag.sim.fast._draws import draw
 from swarmtag.sim.fast._events import flush_slots, room_for_tick
 from swarmtag.sim.fast._index import index_obstacles, index_robots
-from swarmtag.sim.fast._jit import entry, inlined, jit
+from swarmtag.sim.fast._jit import entry, glue, inlined, jit
 from swarmtag.sim.fast._layout import Constants, World
 from swarmtag.sim.fast._motion import move_robots, start_body
 from swarmtag.sim.fast._orders import place_orders_run
@@ -98,7 +98,7 @@ def start_call(r: int, x: Scratch) -> None:
     x.advert_tick[r] = -1
 
 
-@inlined
+@glue
 def tick_run(
     r: int,
     t: int,
@@ -143,7 +143,7 @@ def tick_begin(r: int, t: int, robots: bool, w: World, k: Constants, x: Scratch)
         tags_advertising(r, t, w, k, x)
 
 
-@inlined
+@glue
 def tick_robots(
     r: int,
     t: int,
