@@ -51,6 +51,7 @@ def _run(code: list[str], cache: Path) -> None:
     )
 
 
+@pytest.mark.first
 def test_statistics_warmup_leaves_nothing_for_a_summary_to_compile(tmp_path: Path) -> None:
     _run(["-m", "tests.kernel_warmup", "statistics"], tmp_path)
     warmed = _cached(tmp_path)

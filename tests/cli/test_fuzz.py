@@ -661,6 +661,7 @@ def serve_nothing(path: tuple[str, ...], monkeypatch: pytest.MonkeyPatch) -> Non
         monkeypatch.setattr(uvicorn.Server, "run", lambda _server, sockets=None: None)
 
 
+@pytest.mark.first
 @pytest.mark.parametrize("path", sorted(COMMANDS), ids=" ".join)
 def test_fuzz_command(path, fuzzer):
     serve_nothing(path, fuzzer.monkeypatch)

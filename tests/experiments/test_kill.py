@@ -17,6 +17,8 @@ import subprocess
 import sys
 import time
 
+import pytest
+
 from swarmtag.experiments import ResultsStore, load_study, study_key
 from swarmtag.io import CarrierLog, EventTable, format_csv
 from swarmtag.sim import simulate
@@ -86,6 +88,7 @@ def check_whole_runs(out_dir) -> int:
     return len(per_run)
 
 
+@pytest.mark.first
 def test_killed_runs_resume_without_loss_or_duplicates(tmp_path):
     study_file = write_study(tmp_path, KILL_TOML)
     out = tmp_path / "out"

@@ -138,6 +138,7 @@ def check_against_metrics(out, claim, offset, entry):
         assert judged["significant"] == (judged["appears"] and found["p_bootstrap"] < SIGNIFICANCE)
 
 
+@pytest.mark.first
 def test_k_seeds_are_stored_apart_judged_and_resumed(tmp_path, capsys):
     source = write_study(tmp_path, TINY_SCALABILITY)
     out = tmp_path / "out"
@@ -194,6 +195,7 @@ def test_k_seeds_are_stored_apart_judged_and_resumed(tmp_path, capsys):
         assert new["per_seed"][:2] == old["per_seed"]
 
 
+@pytest.mark.first
 def test_an_interrupted_k_seed_run_resumes(tmp_path):
     study = load_study(write_study(tmp_path, TINY_SCALABILITY))
     out = tmp_path / "out"

@@ -73,6 +73,7 @@ def _compare(world: Scenario, runs: int, policies: list) -> tuple[dict[str, list
 POLICIES = [Urgency(alpha=0.7), Proximity(), Weighted(w=0.3), Urgency(alpha=2.0), Edf()]
 
 
+@pytest.mark.first
 @pytest.mark.parametrize("realism", [False, True], ids=["realism-off", "realism-on"])
 def test_small_swarm_event_logs_are_identical(realism):
     changes = {"realism": REALISM} if realism else {}
@@ -83,6 +84,7 @@ def test_small_swarm_event_logs_are_identical(realism):
     assert kinds >= (TREE | {"breakdown"} if realism else TREE), kinds
 
 
+@pytest.mark.first
 @pytest.mark.parametrize("realism", [False, True], ids=["realism-off", "realism-on"])
 def test_large_swarm_event_logs_are_identical(realism):
     changes = {"realism": REALISM} if realism else {}

@@ -45,6 +45,7 @@ def test_the_built_in_controller_conforms_to_itself():
     assert check_controller(lambda: BUILTIN, WORLD, Proximity(), seeds=[0]) is None
 
 
+@pytest.mark.first
 def test_a_selection_that_ignores_urgency_is_caught_at_its_first_wrong_choice():
     found = check_controller(
         lambda: TreeController(ignores_urgency),

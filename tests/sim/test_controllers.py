@@ -72,6 +72,7 @@ def test_a_user_written_controller_runs_through_simulate():
     check_controller(CountingController, SCENARIO, Proximity(), ticks=200)
 
 
+@pytest.mark.first
 def test_a_user_controller_that_decides_otherwise_changes_the_runs():
     longer = replace(SCENARIO, ticks=3000)
     result = simulate(longer, Proximity(), seed=1, runs=2, controller=IdleController())

@@ -301,6 +301,7 @@ def _index_robots_now(r: int, w: World, k: Constants, x: Scratch) -> None:
     index_robots(r, w, k, x)
 
 
+@pytest.mark.first
 def test_a_split_run_leaves_the_robots_index_of_where_they_stand(monkeypatch):
     # thread 1 builds the next tick's robots' index at the end of a tick (after docking),
     # and a paused run keeps it for its next call: it must be the index of the robots' places

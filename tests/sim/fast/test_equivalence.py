@@ -195,6 +195,7 @@ def test_backends_agree(case, policy):
         assert (fast.end_tick < CASES[case].run_ticks).any(), f"{case}: no run ended early"
 
 
+@pytest.mark.first
 def test_the_warehouse_hall_places_orders_and_delivers():
     # the hall only tests the warehouse if orders arrive and robots deliver them (the small
     # warehouse case asserts the same in test_backends_agree)
@@ -203,6 +204,7 @@ def test_the_warehouse_hall_places_orders_and_delivers():
     assert result.delivered.sum() > 0
 
 
+@pytest.mark.first
 def test_hundreds_of_runs_agree():
     # the published set-up: 200 runs at full length, the urgency policy most sensitive to order
     result = compare(
@@ -276,6 +278,7 @@ def scenarios(draw: st.DrawFn) -> Scenario:
     )
 
 
+@pytest.mark.first
 @settings(max_examples=length(40, 200))
 @given(scenario=scenarios(), policy=st.sampled_from(POLICIES), seed=st.integers(0, 2**32))
 def test_random_scenarios_agree(scenario, policy, seed):

@@ -98,6 +98,7 @@ LAB = replace(
 """A lab run with a short radio, operator writes and breakdowns (a list fills and purges)."""
 
 
+@pytest.mark.first
 @pytest.mark.parametrize(
     ("scenario", "bound"),
     [(_hall(3000, 20.0, status_delay=2, speed_variation=0.2), 44), (LAB, 62)],

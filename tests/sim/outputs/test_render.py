@@ -184,6 +184,7 @@ def test_blitted_frames_are_the_full_redraws_pixel_for_pixel(which, request):
     assert len({f.tobytes() for f in blitted}) == len(indices)  # every tick looks different
 
 
+@pytest.mark.first
 def test_gif_frames_are_the_full_redraws_through_one_palette(split, tmp_path):
     path = tmp_path / "a.gif"
     count = animate(split, path, every=50)
