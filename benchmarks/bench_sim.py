@@ -6,18 +6,22 @@ profile (default: ``base`` and ``paper-sim``) and prints robot-ticks per second 
 ``run_batch`` (random draws, kernel, event recording; scene sampling excluded), best of
 ``--repeat`` batches, and writes them to ``benchmarks/results/`` (``_results.py``). Rates
 count the ticks actually stepped, so a batch whose runs all end early is still measured
-fairly.
+fairly. Then the reference's scene sampler alone: seconds per scene of ``--scenes`` runs
+for an uncrowded 3 x 7 scene and a 20 x 40 one whose pick-up area is crowded to the grid
+fallback (every placement gives up 100 times first).
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 
 from _results import begin
 
 from swarmtag.policy import Urgency
-from swarmtag.sim import RandomSource, load_profile, make_params, run_batch
+from swarmtag.sim import RandomSource, Scenario, load_profile, make_params, run_batch
+from swarmtag.sim.model.scene import sample_scene
 from swarmtag.sim.runner import seeded_state
 
 # (robots, carriers, runs, ticks): carriers per the density rule; runs fill the batch.
@@ -49,11 +53,28 @@ def bench(profile: str, case: tuple[int, int, int, int], repeat: int) -> float:
     return best
 
 
+SCENES = {
+    "3x7": Scenario.default(3, 7),
+    "20x40 grid fallback": replace(Scenario.default(20, 40), arena=None, arena_scaling=0.3),
+}
+"""The scene sampler's cases: the first places at once, the second gives up 100 times."""
+
+
+def bench_scenes(name: str, scenes: int) -> float:
+    """Seconds per scene of runs ``0 .. scenes - 1`` of seed 11."""
+    params = make_params(SCENES[name], Urgency(alpha=0.7))
+    start = time.perf_counter()
+    for run in range(scenes):
+        sample_scene(params, seed=11, run=run)
+    return (time.perf_counter() - start) / scenes
+
+
 def main() -> None:
     """Print robot-ticks per second for each case."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeat", type=int, default=3, help="batches per case, best kept")
     parser.add_argument("--profile", action="append", help="profile(s) to measure")
+    parser.add_argument("--scenes", type=int, default=8, help="scenes sampled per scene case")
     args, record = begin(parser, __file__)
     header = ("profile", "robots", "carriers", "runs", "ticks", "robot-ticks/s")
     print(
@@ -74,6 +95,10 @@ def main() -> None:
                 ticks=ticks,
                 robot_ticks_per_s=rate,
             )
+    for name in SCENES:
+        seconds = bench_scenes(name, args.scenes)
+        print(f"scene {name}: {seconds * 1000:.2f} ms a scene ({args.scenes} scenes)")
+        record.row(scene=name, scenes=args.scenes, seconds_per_scene=seconds)
     record.save()
 
 

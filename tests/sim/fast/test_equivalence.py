@@ -171,9 +171,9 @@ ENDING = frozenset({"base-disc", "disc-realism", "herding-no-avoidance"})
 """Cases some of whose runs deliver every carrier and end early (the end of a run compared)."""
 
 ONE_RUN_EACH = {"grid-placed-20x40": length(1, 2)}
-"""Runs per policy where not 4, each policy on runs of its own: the grid placement of 20 x 40
-takes seconds per run in the reference backend, and the scene does not depend on the policy,
-so four policies test four scenes."""
+"""Runs per policy where not 4, each policy on runs of its own: a run of the grid placement of
+20 x 40 takes about half a second in the reference backend, and the scene does not depend on
+the policy, so four policies test four scenes."""
 
 
 SEED, RUNS, OFFSET = 11, 4, 3

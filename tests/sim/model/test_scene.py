@@ -9,7 +9,8 @@ from swarmtag.errors import ConfigError
 from swarmtag.policy import Proximity, Urgency
 from swarmtag.sim import Arena, Realism, Scenario, Scene, make_params, sample_scene
 from swarmtag.sim.model.geometry import length
-from swarmtag.sim.model.scene import grid_place
+from swarmtag.sim.model.scene import PLACE_ATTEMPTS, grid_place
+from swarmtag.sim.model.scene import _place as place
 
 
 @pytest.mark.parametrize(("robots", "carriers"), [(3, 7), (10, 20), (20, 40)])
@@ -66,6 +67,41 @@ def test_a_pick_up_area_too_crowded_for_random_placement_gets_the_densest_grid()
     assert np.array_equal(scene.carrier_pos, again.carrier_pos)
     other = [sample_scene(make_params(crowded, Proximity()), seed=s, run=0) for s in range(1, 6)]
     assert any(not np.array_equal(o.carrier_pos, scene.carrier_pos) for o in other)
+
+
+def _one_at_a_time(rng, count, low, high, pitch):
+    """SPEC 4.1's placement as written: one candidate pair a draw, Chebyshev apart, 100 restarts."""
+    for _ in range(100):
+        placed = []
+        for _ in range(count):
+            for _ in range(PLACE_ATTEMPTS):
+                ux, uy = rng.random(2).tolist()
+                x, y = low[0] + ux * (high[0] - low[0]), low[1] + uy * (high[1] - low[1])
+                if all(max(abs(x - ox), abs(y - oy)) >= pitch for ox, oy in placed):
+                    placed.append((x, y))
+                    break
+            else:
+                break
+        else:
+            return np.array(placed)
+    return grid_place(rng, count, low=np.array(low), high=np.array(high), pitch=pitch)
+
+
+@pytest.mark.parametrize(("count", "side"), [(7, 6.0), (12, 4.2), (16, 3.0)])
+def test_candidates_tested_in_blocks_give_one_at_a_time_s_points_and_stream(count, side):
+    # a crowded square (most candidates rejected, the kept one mid-block), one crowded to
+    # the grid fallback (16 of pitch 1 in 3 x 3 m, its 16 cells: placing gives up 100 times)
+    def apart(xs, ys, others):
+        gap = np.maximum(np.abs(xs[:, None] - others[:, 0]), np.abs(ys[:, None] - others[:, 1]))
+        return (gap >= 1.0).all(axis=1)
+
+    for seed in range(3):
+        blocked, plain = np.random.default_rng(seed), np.random.default_rng(seed)
+        low, high = np.zeros(2), np.full(2, side)
+        points = place(blocked, count, low=low, high=high, far_enough=apart, pitch=1.0)
+        expected = _one_at_a_time(plain, count, (0.0, 0.0), (side, side), 1.0)
+        assert points.tobytes() == expected.tobytes()
+        assert blocked.random() == plain.random()  # the stream left at the same place
 
 
 def test_the_grid_refuses_more_bodies_than_cells():

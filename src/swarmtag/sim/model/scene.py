@@ -33,11 +33,11 @@ A warehouse scene (orders, robots on the floor) is sampled by
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Final
 
 import numpy as np
+from numpy.typing import NDArray
 
 from swarmtag.errors import ConfigError
 from swarmtag.sim.model.geometry import Float
@@ -54,37 +54,69 @@ PLACE_ATTEMPTS: Final = 1000
 PLACE_RESTARTS: Final = 100
 
 
+FarEnough = Callable[[Float, Float, Float], NDArray[np.bool_]]
+"""Which candidates ``(xs[j], ys[j])`` keep their distance to every point of ``placed`` (rows)."""
+
+_FIRST_BLOCK: Final = 16
+"""Candidates drawn and tested at once for a point at first; the blocks double after each miss."""
+_BLOCK: Final = 128
+"""Most candidates drawn and tested at once (a grid-placed 20 x 40 scene: 0.53 s one at a time,
+0.08 s so; an uncrowded 3 x 7 scene: 0.1 ms one at a time, 0.2 ms so)."""
+
+
 def _place(
     rng: np.random.Generator,
     count: int,
     *,
     low: Float,
     high: Float,
-    far_enough: Callable[[float, float, list[tuple[float, float]]], bool],
+    far_enough: FarEnough,
     pitch: float,
 ) -> Float:
-    """``count`` points placed one after another by rejection, else on the grid (module docs).
-
-    The candidates and distances are plain floats: the same IEEE operations as
-    on arrays, without numpy's call overhead on two numbers (a crowded area
-    tries hundreds of thousands of candidates).
-    """
-    low_x, low_y = low.tolist()
-    span_x, span_y = (high - low).tolist()
+    """``count`` points placed one after another by rejection, else on the grid (module docs)."""
+    span = high - low
     for _ in range(PLACE_RESTARTS):
-        placed: list[tuple[float, float]] = []
-        for _ in range(count):
-            for _ in range(PLACE_ATTEMPTS):
-                unit_x, unit_y = rng.random(2).tolist()
-                x, y = low_x + unit_x * span_x, low_y + unit_y * span_y
-                if far_enough(x, y, placed):
-                    placed.append((x, y))
-                    break
-            else:
+        placed = np.empty((count, 2))
+        for n in range(count):
+            point = _first_kept(rng, low, span, far_enough, placed[:n])
+            if point is None:
                 break
+            placed[n] = point
         else:
-            return np.array(placed, dtype=np.float64).reshape(count, 2)
+            return placed
     return grid_place(rng, count, low=low, high=high, pitch=pitch)
+
+
+def _first_kept(
+    rng: np.random.Generator, low: Float, span: Float, far_enough: FarEnough, placed: Float
+) -> Float | None:
+    """The first of ``PLACE_ATTEMPTS`` candidates that ``far_enough`` keeps, or None.
+
+    The candidates are drawn and tested in blocks (a crowded area tries
+    hundreds of thousands of them; one at a time, each cost two numpy calls
+    and a Python loop over the points placed). The stream is left exactly
+    where drawing them one pair at a time leaves it: after a block that
+    holds the kept one, its generator goes back to before the block and
+    draws again only as far as the kept one. The same IEEE operations on
+    the same numbers: the same points as one at a time.
+    """
+    bits = rng.bit_generator
+    tried, block = 0, _FIRST_BLOCK
+    while tried < PLACE_ATTEMPTS:
+        size = min(block, PLACE_ATTEMPTS - tried)
+        before = bits.state
+        candidates = low + rng.random((size, 2)) * span
+        kept = far_enough(candidates[:, 0], candidates[:, 1], placed)
+        if kept.any():
+            first = int(kept.argmax())
+            if first < size - 1:
+                bits.state = before
+                rng.random((first + 1, 2))
+            kept_point: Float = candidates[first]
+            return kept_point
+        tried += size
+        block = min(2 * block, _BLOCK)
+    return None
 
 
 def grid_place(
@@ -118,8 +150,9 @@ def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
     half, radius, arena = params.carrier_half, params.robot_radius, params.arena
     pitch = 2 * half + params.carrier_spacing
 
-    def carriers_apart(x: float, y: float, others: list[tuple[float, float]]) -> bool:
-        return all(max(abs(x - ox), abs(y - oy)) >= pitch for ox, oy in others)
+    def carriers_apart(xs: Float, ys: Float, others: Float) -> NDArray[np.bool_]:
+        gap = np.maximum(np.abs(xs[:, None] - others[:, 0]), np.abs(ys[:, None] - others[:, 1]))
+        return np.asarray((gap >= pitch).all(axis=1), dtype=np.bool_)
 
     carrier_pos = _place(
         rng,
@@ -138,10 +171,9 @@ def sample_scene(params: Params, *, seed: int, run: int) -> Scene:
 
     diameter = 2 * radius
 
-    def robots_apart(x: float, y: float, others: list[tuple[float, float]]) -> bool:
-        return all(
-            math.sqrt((ox - x) * (ox - x) + (oy - y) * (oy - y)) >= diameter for ox, oy in others
-        )
+    def robots_apart(xs: Float, ys: Float, others: Float) -> NDArray[np.bool_]:
+        dx, dy = others[:, 0] - xs[:, None], others[:, 1] - ys[:, None]
+        return np.asarray((np.sqrt(dx * dx + dy * dy) >= diameter).all(axis=1), dtype=np.bool_)
 
     robot_pos = _place(
         rng,
