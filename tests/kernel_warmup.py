@@ -128,11 +128,11 @@ def _warm_batched_then_split(
     class SharedCompiled(event.Listener):
         """Starts ``split`` when the compile of ``tick_end`` ends: every function it calls is cached."""
 
-        def on_start(self, event: event.Event) -> None:
+        def on_start(self, compile_event: event.Event) -> None:
             pass
 
-        def on_end(self, event: event.Event) -> None:
-            if event.data["dispatcher"] is tick_end:
+        def on_end(self, compile_event: event.Event) -> None:
+            if compile_event.data["dispatcher"] is tick_end:
                 start_split()
 
     if kernel_compiled():
