@@ -7,7 +7,6 @@ STAMP  := $(VENV)/.installed
 
 .PHONY: demo test lint typecheck unit clean generate
 
-WARMUP_PID := $(VENV)/.kernel-warmup.pid
 WARMUP_LOG := $(VENV)/kernel-warmup.log
 DEMO_STAMP := $(VENV)/.installed-demo
 
@@ -20,19 +19,18 @@ DEMO_STAMP := $(VENV)/.installed-demo
 # for it. Entry points: batched (every command) and split (one run over threads; the tests),
 # which starts once batched has cached the code they share (tests/kernel_warmup.py); and
 # statistics, the bootstrap's compiled loops (a few seconds, on the core the kernel leaves).
+# The warm-up holds a lock in numba's cache folder while it runs: `demo` waits for it there
+# (--wait), and the tests' own warm-up (tests/conftest.py) waits for it while pytest collects.
 define install_with_warmup
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install -e '.[fast]'
 	@echo "make: compiling the fast simulation kernel ($(1)) in the background; log: $(WARMUP_LOG)"
-	@$(BIN)/python -m tests.kernel_warmup $(1) > $(WARMUP_LOG) 2>&1 & echo $$! > $(WARMUP_PID)
+	@$(BIN)/python -m tests.kernel_warmup $(1) > $(WARMUP_LOG) 2>&1 &
 	$(BIN)/python -m compileall -q src
 endef
 
-WAIT_FOR_WARMUP = @if [ -f $(WARMUP_PID) ]; then pid=$$(cat $(WARMUP_PID)); \
-	if kill -0 $$pid 2>/dev/null; then \
-		echo "make: waiting for the fast kernel's compilation (started during the install)"; \
-		while kill -0 $$pid 2>/dev/null; do sleep 1; done; fi; rm -f $(WARMUP_PID); fi
+WAIT_FOR_WARMUP = @$(BIN)/python -m tests.kernel_warmup --wait
 
 # The install takes about 80 s the first time: pip says what it collects, downloads and
 # installs (no --quiet, so that the wait is visible; its progress bars show on a terminal).
@@ -72,7 +70,8 @@ typecheck: $(STAMP)
 	$(BIN)/mypy
 
 # One pytest worker per logical core (at most 8; psutil may count two vCPUs as one physical core);
-# tests/conftest.py compiles the fast kernel first. Tests that bound seconds run alone after.
+# tests/conftest.py has the fast kernel compiled (or waits for the install's warm-up) while
+# pytest collects, and starts the tests once it is in. Tests that bound seconds run alone after.
 # Each part ends with its slowest tests (--durations), so every run shows where the time goes.
 # Bytecode is written during the tests even where PYTHONDONTWRITEBYTECODE is set: pytest keeps
 # its rewritten test modules (collecting all of them takes 12 s a process without, 7 s with).
@@ -81,7 +80,6 @@ CHROMIUM ?= /usr/bin/chromium
 
 unit: $(STAMP)
 	@test -x $(CHROMIUM) || { echo "make test needs Chromium at $(CHROMIUM) for the console's browser tests: run 'apt-get install -y chromium' as root (.ci/run does)"; exit 1; }
-	$(WAIT_FOR_WARMUP)
 	PYTHONDONTWRITEBYTECODE= $(BIN)/pytest --numprocesses logical --maxprocesses 8 --dist worksteal -m "not serial" --durations=30
 	PYTHONDONTWRITEBYTECODE= $(BIN)/pytest -m serial --durations=10
 

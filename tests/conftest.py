@@ -2,7 +2,7 @@
 
 Before any test, the fast kernel's two entry points and the bootstrap's
 compiled loops are compiled (or loaded) side by side in three processes
-(``tests/kernel_warmup.py``).
+(``tests/kernel_warmup.py``), while the tests are collected.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import importlib.util
 import os
 import subprocess
 import sys
+from collections.abc import Generator
 from pathlib import Path
 
 import pytest
@@ -53,29 +54,62 @@ def pytest_configure(config: pytest.Config) -> None:
     _compile_kernel(config)
 
 
-def _compile_kernel(config: pytest.Config) -> None:
-    """Have the fast kernel's machine code cached before the tests (or their workers) start.
+_WARMUP = pytest.StashKey[subprocess.Popen[str]]()
 
-    Its first compilation takes minutes on one core. Done here, the two
-    entry points (and the statistics' loops) compile side by side; without it, each test worker (and
-    each command-line test's own process) would compile the kernel again
-    while the first was still at it, and the command-line tests would see
-    the first-compilation note on stderr. Once cached, this loads it in
-    a few seconds. An xdist worker skips it: its controller has done it.
+
+def _compile_kernel(config: pytest.Config) -> None:
+    """Start having the fast kernel's machine code cached; the tests wait for it (``_kernel_ready``).
+
+    Its first compilation takes a minute or more on one core. Done here, the
+    two entry points (and the statistics' loops) compile side by side;
+    without it, each test worker (and each command-line test's own process)
+    would compile the kernel again while the first was still at it, and the
+    command-line tests would see the first-compilation note on stderr. Once
+    cached, this loads it in a few seconds. It runs beside the collection
+    (the test workers' too), and waits for a warm-up that ``make`` started
+    during the install (its lock). An xdist worker skips it: its controller
+    does it.
     """
-    if hasattr(config, "workerinput") or importlib.util.find_spec("numba") is None:
+    if (
+        hasattr(config, "workerinput")
+        or config.option.collectonly
+        or importlib.util.find_spec("numba") is None
+    ):
         return
     root = Path(__file__).resolve().parent.parent
-    process = subprocess.run(
+    config.stash[_WARMUP] = subprocess.Popen(
         [sys.executable, "-m", "tests.kernel_warmup", *ENTRIES],
         cwd=root,
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
-        check=False,
     )
+
+
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_runtestloop(session: pytest.Session) -> Generator[None, object, object]:
+    """Run the tests once the kernel warm-up ``_compile_kernel`` started has ended, or stop."""
+    _kernel_ready(session.config)
+    return (yield)
+
+
+def _kernel_ready(config: pytest.Config) -> None:
+    """Wait for the kernel warm-up; a failed one stops the run with its output."""
+    process = config.stash.get(_WARMUP, None)
+    if process is None:
+        return
+    del config.stash[_WARMUP]
+    output = process.communicate()[0]
     if process.returncode:
-        raise pytest.UsageError("compiling the fast kernel failed:\n" + process.stdout)
+        raise pytest.UsageError("compiling the fast kernel failed:\n" + output)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """A run that ended before its tests (interrupted, or refused) stops its warm-up."""
+    process = config.stash.get(_WARMUP, None)
+    if process is not None:
+        process.terminate()
+        process.communicate()
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

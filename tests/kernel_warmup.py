@@ -15,30 +15,84 @@ compile of ``_tick.tick_end``, the last of them, has ended), loads them,
 and compiles its own part (about 23 s):
 about 40 s of CPU less than compiling both from scratch at once, which is
 what the first ``make test`` waits for while pip and mypy share the cores.
+
+A warm-up of several entries holds a lock in numba's cache folder
+(``lock``) while it runs, and one started while another holds it waits for
+it, then loads what that one compiled: so ``make test`` starts pytest while
+its install's warm-up is still compiling, and the test workers collect
+meanwhile; ``--wait`` only waits (``make demo``). The imports that load
+numba and swarmtag come after the lock is taken.
 """
 
 from __future__ import annotations
 
+import fcntl
+import importlib.util
+import os
 import subprocess
 import sys
 import traceback
-from collections.abc import Sequence
-from dataclasses import replace
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from swarmtag.analysis import summarize
-from swarmtag.io import CarrierLog
-from swarmtag.policy import Urgency
-from swarmtag.sim import Scenario, simulate
+if TYPE_CHECKING:
+    from swarmtag.io import CarrierLog
 
 ENTRIES = ("batched", "split", "statistics")
 """The kernel's entry points (``_tick.advance``, which runs on threads, and
 ``_split.split_ticks``) and the bootstrap's compiled loops (``analysis._compiled``)."""
 
 
+LOCK_NAME = "kernel-warmup.lock"
+"""The lock's file name in numba's cache folder."""
+
+
+def lock_path() -> Path:
+    """The lock of the cache the kernel is compiled into: ``NUMBA_CACHE_DIR``, else the kernel's own.
+
+    numba caches a module's functions in the ``__pycache__`` beside it
+    unless ``NUMBA_CACHE_DIR`` names a folder (``tests/test_kernel_warmup.py``
+    uses one of its own): one lock per cache.
+    """
+    folder = os.environ.get("NUMBA_CACHE_DIR", "")
+    if folder:
+        path = Path(folder, LOCK_NAME)
+    else:
+        spec = importlib.util.find_spec("swarmtag")  # finds the package without importing it
+        if spec is None or not spec.submodule_search_locations:
+            msg = "the kernel warm-up needs swarmtag installed"
+            raise RuntimeError(msg)
+        path = Path(spec.submodule_search_locations[0], "sim", "fast", "__pycache__", LOCK_NAME)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+@contextmanager
+def lock(note: str = "") -> Iterator[None]:
+    """Hold the warm-up lock; if another warm-up holds it, print ``note`` (if any) and wait."""
+    with lock_path().open("a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            if note:
+                print(note, flush=True)
+            fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
 def warm(entry: str) -> None:
     """Run two ticks through ``entry``: numba compiles it, or loads it from its cache."""
+    from dataclasses import replace
+
+    from swarmtag.analysis import summarize
+    from swarmtag.policy import Urgency
+    from swarmtag.sim import Scenario, simulate
+
     if entry == "statistics":
         summarize(_mixed_log(), n_resamples=200, compiled=True)
         return
@@ -59,6 +113,10 @@ def _mixed_log(runs: int = 12, carriers: int = 7) -> CarrierLog:
     so every compiled loop of a real summary runs, with a real summary's
     argument types (``tests/test_kernel_warmup.py`` checks that none is left).
     """
+    import numpy as np
+
+    from swarmtag.io import CarrierLog
+
     rows = 2 * runs * carriers
     draws = np.random.default_rng(0)
     order = draws.uniform(0, 80, rows)
@@ -147,13 +205,20 @@ def _warm_batched_then_split(
     return []
 
 
+WAITING = "make: waiting for the fast kernel's compilation (started during the install)"
+"""What ``--wait`` prints when it has to wait."""
+
 if __name__ == "__main__":
     arguments = sys.argv[1:]
+    if arguments == ["--wait"]:
+        with lock(WAITING):
+            sys.exit(0)
     if not arguments or any(entry not in ENTRIES for entry in arguments):
-        sys.exit(f"usage: python -m tests.kernel_warmup {{{'|'.join(ENTRIES)}}} ...")
+        sys.exit(f"usage: python -m tests.kernel_warmup {{--wait|{'|'.join(ENTRIES)} ...}}")
     if len(arguments) == 1 and arguments[0] != "batched":
-        warm(arguments[0])
+        warm(arguments[0])  # one entry: a warm-up's own process, or a cache of its own
     else:
-        problems = warm_all(arguments)
+        with lock():
+            problems = warm_all(arguments)
         if problems:
             sys.exit("\n".join(problems))
