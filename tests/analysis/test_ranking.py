@@ -6,9 +6,10 @@ import math
 import warnings
 
 import numpy as np
+import pytest
 from PIL import Image
 
-from swarmtag.analysis import summarize
+from swarmtag.analysis import MetricsReport, summarize
 from swarmtag.analysis.figures import pareto_figure
 from swarmtag.analysis.ranking import rank_conditions, ranking_html, ranking_markdown
 from swarmtag.errors import BackendFallback
@@ -22,7 +23,9 @@ WORLD = Scenario.from_mapping(
 NAMES = ("proximity", "edf", "cbaa:comm_range=10,loss=0.1")
 
 
-def runs():
+@pytest.fixture(scope="module")
+def ranked() -> tuple[MetricsReport, EventTable]:
+    """The summary and events of four runs of each condition: simulated once for the module."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", BackendFallback)
         results = [simulate(WORLD, parse_policy(name), seed=2, runs=4) for name in NAMES]
@@ -31,8 +34,8 @@ def runs():
     return summarize(log, n_resamples=200, seed=1), events
 
 
-def test_conditions_are_ranked_by_pa_and_the_front_is_the_undominated_set():
-    report, events = runs()
+def test_conditions_are_ranked_by_pa_and_the_front_is_the_undominated_set(ranked):
+    report, events = ranked
     rows = rank_conditions(report, events)
     assert [row.rank for row in rows] == [1, 2, 3]
     pa = [row.pa.value for row in rows]
@@ -46,8 +49,8 @@ def test_conditions_are_ranked_by_pa_and_the_front_is_the_undominated_set():
     assert rows[0].pareto  # the best PA is never dominated
 
 
-def test_messages_per_delivery_are_the_messages_over_the_deliveries():
-    report, events = runs()
+def test_messages_per_delivery_are_the_messages_over_the_deliveries(ranked):
+    report, events = ranked
     rows = {row.condition: row for row in rank_conditions(report, events)}
     cbaa = parse_policy(NAMES[2]).name
     mine = events.condition == cbaa
@@ -62,8 +65,8 @@ def test_messages_per_delivery_are_the_messages_over_the_deliveries():
     assert "<table>" in ranking_html(list(rows.values()), time_unit="tick")
 
 
-def test_the_pareto_figure_is_a_real_picture(tmp_path):
-    report, events = runs()
+def test_the_pareto_figure_is_a_real_picture(ranked, tmp_path):
+    report, events = ranked
     rows = rank_conditions(report, events)
     path = tmp_path / "pareto.png"
     pareto_figure({"5x10": rows, "again": rows}, path, time_unit="tick")
