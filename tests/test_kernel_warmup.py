@@ -5,6 +5,7 @@ install so that the demo's first ``simulate`` loads the bootstrap's machine
 code instead of compiling it. Checked in a numba cache folder of its own: a
 summary of simulated runs (some carriers undelivered, so the censored and
 Kaplan-Meier paths run) after the warm-up adds no file to that folder.
+And a warm-up started while another holds the cache's lock waits for it.
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+from tests.kernel_warmup import WAITING, lock
 
 pytest.importorskip("numba")
 
@@ -58,3 +61,23 @@ def test_statistics_warmup_leaves_nothing_for_a_summary_to_compile(tmp_path: Pat
     assert any(name.startswith("_compiled.km_reached") for name in warmed)
     _run(["-c", SUMMARY], tmp_path)
     assert _cached(tmp_path) == warmed
+
+
+def test_a_warm_up_started_while_another_runs_waits_for_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # make starts pytest while its install's warm-up is still compiling: the tests' warm-up
+    # (and make demo's --wait) must wait for that one's lock, in the cache they share.
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    command = [sys.executable, "-m", "tests.kernel_warmup", "--wait"]
+    with lock():  # taken before the second one starts
+        waiting = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, text=True)
+        assert waiting.stdout is not None
+        said = waiting.stdout.readline().strip()
+        still = waiting.poll() is None
+    with waiting:
+        assert said == WAITING  # it found the lock held
+        assert still  # and waited for it
+        assert waiting.wait(timeout=60) == 0
+    free = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=True)
+    assert free.stdout == ""  # nobody holds it: no wait, nothing said
