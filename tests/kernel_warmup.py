@@ -26,7 +26,6 @@ numba and swarmtag come after the lock is taken.
 
 from __future__ import annotations
 
-import fcntl
 import importlib.util
 import os
 import subprocess
@@ -71,8 +70,23 @@ def lock_path() -> Path:
 
 @contextmanager
 def lock(note: str = "") -> Iterator[None]:
-    """Hold the warm-up lock; if another warm-up holds it, print ``note`` (if any) and wait."""
-    with lock_path().open("a") as handle:
+    """Hold the warm-up lock; if another warm-up holds it, print ``note`` (if any) and wait.
+
+    Without POSIX file locks (Windows), or where the cache folder cannot
+    hold the lock's file, there is none: warm-ups started together then
+    each compile what is not cached yet.
+    """
+    if sys.platform == "win32":
+        yield
+        return
+    import fcntl
+
+    try:
+        handle = lock_path().open("a")
+    except OSError:
+        yield
+        return
+    with handle:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
