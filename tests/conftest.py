@@ -98,8 +98,8 @@ def _kernel_ready(config: pytest.Config) -> None:
     process = config.stash.get(_WARMUP, None)
     if process is None:
         return
+    output = process.communicate()[0]  # interrupted here, pytest_unconfigure stops it
     del config.stash[_WARMUP]
-    output = process.communicate()[0]
     if process.returncode:
         raise pytest.UsageError("compiling the fast kernel failed:\n" + output)
 
