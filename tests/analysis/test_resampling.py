@@ -3,12 +3,24 @@ kernels alike), seeded streams."""
 
 from __future__ import annotations
 
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from threadpoolctl import threadpool_info, threadpool_limits
 
-from swarmtag.analysis import ConditionRuns, condition_seed_sequence, run_values
+from swarmtag.analysis import (
+    ConditionRuns,
+    choice_statistics,
+    condition_seed_sequence,
+    run_values,
+    summarize,
+)
 from swarmtag.analysis._kernels import (
     COMPILE_WORTH,
     numba_available,
@@ -19,8 +31,10 @@ from swarmtag.analysis.resampling import (
     condition_generator,
     iter_multiplicities,
     multiplicities,
+    one_blas_thread,
     resampled_percentiles,
 )
+from swarmtag.io import CarrierLog, EventTable
 from tests.io.strategies import carrier_logs
 
 needs_numba = pytest.mark.skipif(not numba_available(), reason="numba (the fast extra) is absent")
@@ -191,3 +205,56 @@ def test_both_ways_of_counting_draws_agree(compiled, n_runs, n_resamples, seed):
     )
     plain = iter_multiplicities(condition_generator(seed, "c"), n_runs, n_resamples, width=n_runs)
     np.testing.assert_array_equal(np.vstack(list(chunks)), np.vstack(list(plain)))
+
+
+def _blas_threads() -> list[int]:
+    """The thread count of each BLAS library loaded when the bootstraps first ran (numpy's)."""
+    with one_blas_thread():  # the libraries it limits are those loaded then, numpy's included
+        pass
+    numpy_blas = Path(np.__file__).parent.with_name("numpy.libs")
+    pools = [pool for pool in threadpool_info() if pool["user_api"] == "blas"]
+    limited = [pool for pool in pools if Path(pool["filepath"]).parent == numpy_blas]
+    return [pool["num_threads"] for pool in limited or pools]
+
+
+def test_one_blas_thread_limits_blas_to_one_thread_and_then_restores_it():
+    before = _blas_threads()
+    if not before:
+        pytest.skip("threadpoolctl finds no BLAS library to limit in this numpy")
+    with one_blas_thread():
+        assert _blas_threads() == [1] * len(before)
+    assert _blas_threads() == before
+
+
+def test_a_chunk_product_on_one_blas_thread_has_the_same_bits_as_on_every_core():
+    # the bootstrap's products, of chunk size: one thread must not change the numbers
+    rng = np.random.default_rng(5)
+    weights = multiplicities(rng.integers(0, 100, size=(4000, 100)), 100).astype(np.float64)
+    per_run = rng.normal(30.0, 12.0, size=(100, 25))
+    with threadpool_limits(limits=max(2, os.cpu_count() or 1), user_api="blas"):
+        threaded = weights @ per_run
+    with one_blas_thread():
+        alone = weights @ per_run
+    assert threaded.tobytes() == alone.tobytes()
+
+
+def test_the_bootstraps_draw_their_products_on_one_blas_thread(monkeypatch):
+    inside: list[list[int]] = []
+
+    @contextmanager
+    def spy() -> Iterator[None]:
+        with one_blas_thread():
+            inside.append(_blas_threads())
+            yield
+
+    monkeypatch.setattr("swarmtag.analysis.bootstrap.one_blas_thread", spy)
+    monkeypatch.setattr("swarmtag.analysis.choices.one_blas_thread", spy)
+    log = CarrierLog(condition=["a", "b"], run=[0, 0], seed=[0, 0], carrier=[1, 1],
+        urgency0=[5, 5], order_time=[0.0, 0.0], pickup_time=[1.0, 1.0],
+        delivery_time=[20.0, 12.0], robot=[0, 0])  # fmt: skip
+    summarize(log, n_resamples=20)
+    events = EventTable(condition=["a"], seed=[0], run=[0], time=[1.0], kind=["select"],
+        carrier=[1], robot=[0], value=[5.0], time_unit="tick")  # fmt: skip
+    choice_statistics(events, n_resamples=20)
+    assert len(inside) == 3  # two conditions' summaries, one condition's choices
+    assert all(threads == [1] * len(threads) for threads in inside)

@@ -34,6 +34,7 @@ from swarmtag.analysis.resampling import (
     condition_generator,
     iter_multiplicities,
     multiplicities,
+    one_blas_thread,
 )
 from swarmtag.data import example_trial_path
 from swarmtag.errors import ResourceError
@@ -169,6 +170,8 @@ def test_the_estimate_follows_its_formula():
 @pytest.mark.parametrize("n_resamples", [10, 6000, 20_000])
 def test_the_estimate_bounds_what_summarize_allocates(n_resamples):
     importlib.import_module("scipy.stats")  # a library, not counted by the estimate
+    with one_blas_thread():  # nor is finding the BLAS libraries, once a process
+        pass
     log = _example_log()
     tracemalloc.start()
     try:

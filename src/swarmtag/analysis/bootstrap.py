@@ -43,6 +43,7 @@ from swarmtag.analysis.resampling import (
     bootstrap_memory,
     condition_generator,
     iter_multiplicities,
+    one_blas_thread,
     resampled_percentiles,
 )
 from swarmtag.analysis.runs import ConditionRuns
@@ -232,37 +233,38 @@ def _replicates(
         compiled=compiled,
     )
     start = 0
-    for weights in chunks:
-        stop = start + len(weights)
-        sums = weights.astype(np.float64) @ per_run
-        resampled_percentiles(
-            latencies.values,
-            latencies.runs,
-            weights,
-            percentiles,
-            compiled=compiled,
-            out=pooled[:, start:stop].T,
-        )
-        metrics[1][start:stop] = _ratio(sums[:, 0], sums[:, 1])
-        metrics[2][start:stop] = _ratio(sums[:, 2], sums[:, 3])
-        metrics[3][start:stop] = sums[:, 4] / n_runs
-        metrics[4][start:stop] = sums[:, 1] / n_runs
-        metrics[5][start:stop] = (
-            pooled[0, start:stop]  # every carrier delivered: the same values, the same P95
-            if uncensored
-            else resampled_percentiles(
-                censored.values, censored.runs, weights, [95], compiled=compiled
-            )[:, 0]
-        )
-        metrics[6][start:stop] = _ratio(sums[:, 5], sums[:, 6])
-        # Evaluated for every chunk, on no resample where the figure is undefined outright.
-        km_values = km_resampled_quantiles(
-            censored, weights if km else weights[:0], 95, compiled=compiled
-        )
-        metrics[7][start:stop] = km_values if km else np.nan
-        metrics[8][start:stop] = _ratio(sums[:, 7], sums[:, 8])
-        pa_curve[:, start:stop] = (sums[:, 9:] / n_runs).T
-        start = stop
+    with one_blas_thread():  # products of chunks too small for BLAS threads
+        for weights in chunks:
+            stop = start + len(weights)
+            sums = weights.astype(np.float64) @ per_run
+            resampled_percentiles(
+                latencies.values,
+                latencies.runs,
+                weights,
+                percentiles,
+                compiled=compiled,
+                out=pooled[:, start:stop].T,
+            )
+            metrics[1][start:stop] = _ratio(sums[:, 0], sums[:, 1])
+            metrics[2][start:stop] = _ratio(sums[:, 2], sums[:, 3])
+            metrics[3][start:stop] = sums[:, 4] / n_runs
+            metrics[4][start:stop] = sums[:, 1] / n_runs
+            metrics[5][start:stop] = (
+                pooled[0, start:stop]  # every carrier delivered: the same values, the same P95
+                if uncensored
+                else resampled_percentiles(
+                    censored.values, censored.runs, weights, [95], compiled=compiled
+                )[:, 0]
+            )
+            metrics[6][start:stop] = _ratio(sums[:, 5], sums[:, 6])
+            # Evaluated for every chunk, on no resample where the figure is undefined outright.
+            km_values = km_resampled_quantiles(
+                censored, weights if km else weights[:0], 95, compiled=compiled
+            )
+            metrics[7][start:stop] = km_values if km else np.nan
+            metrics[8][start:stop] = _ratio(sums[:, 7], sums[:, 8])
+            pa_curve[:, start:stop] = (sums[:, 9:] / n_runs).T
+            start = stop
     metrics[0][:] = pooled[0]
     for replicate in metrics:
         replicate.flags.writeable = False

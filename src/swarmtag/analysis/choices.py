@@ -44,6 +44,7 @@ from swarmtag.analysis.resampling import (
     bootstrap_memory,
     condition_generator,
     iter_multiplicities,
+    one_blas_thread,
 )
 from swarmtag.analysis.summary import JsonValue
 from swarmtag.errors import StatisticsError
@@ -337,12 +338,13 @@ def _condition(
     replicates = [np.empty(n_resamples) for _ in CHOICE_COUNTS]  # kept, never copied
     start = 0
     rng = condition_generator(seed, name)
-    for weights in iter_multiplicities(rng, n_runs, n_resamples, width=n_runs):
-        stop = start + len(weights)
-        means = weights @ table / n_runs
-        for column, replicate in enumerate(replicates):
-            replicate[start:stop] = means[:, column]
-        start = stop
+    with one_blas_thread():  # products of chunks too small for BLAS threads
+        for weights in iter_multiplicities(rng, n_runs, n_resamples, width=n_runs):
+            stop = start + len(weights)
+            means = weights @ table / n_runs
+            for column, replicate in enumerate(replicates):
+                replicate[start:stop] = means[:, column]
+            start = stop
     estimates = {}
     for column, count in enumerate(CHOICE_COUNTS):
         values = replicates[column]

@@ -30,7 +30,9 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Iterator, Sequence
-from typing import Final
+from contextlib import contextmanager
+from functools import cache
+from typing import Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,6 +56,7 @@ __all__ = [
     "condition_seed_sequence",
     "iter_multiplicities",
     "multiplicities",
+    "one_blas_thread",
     "resampled_percentiles",
 ]
 
@@ -149,6 +152,34 @@ def condition_seed_sequence(seed: int, condition: str) -> np.random.SeedSequence
 def condition_generator(seed: int, condition: str) -> np.random.Generator:
     """A fresh generator for a condition's bootstrap (see ``condition_seed_sequence``)."""
     return np.random.default_rng(condition_seed_sequence(seed, condition))
+
+
+@cache
+def _blas_controller() -> Any:  # noqa: ANN401 - threadpoolctl ships no type information
+    """The controller (threadpoolctl's) of the BLAS libraries loaded, numpy's among them; once.
+
+    Making one walks every shared library of the process (a few ms and a few
+    hundred kB); limiting through it costs microseconds. Made on first use,
+    after numpy, so it holds numpy's OpenBLAS, the one the products call.
+    """
+    from threadpoolctl import ThreadpoolController  # type: ignore[import-untyped]  # noqa: PLC0415
+
+    return ThreadpoolController()
+
+
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """Run the block with BLAS on one thread: the resamples' products are too small for more.
+
+    A product of a chunk's multiplicities with the per-run values (``B x R``
+    by ``R x k``, R about a hundred) takes milliseconds; OpenBLAS would split
+    it over every core and its threads then spin waiting for the next one,
+    burning about as much CPU time again as the statistics themselves. One
+    thread computes each product element the same way (the split is over
+    rows), so the numbers are the same bits.
+    """
+    with _blas_controller().limit(limits=1, user_api="blas"):
+        yield
 
 
 def multiplicities(
