@@ -11,6 +11,7 @@ since changing it would change those bits.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import tracemalloc
 from pathlib import Path
@@ -18,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from swarmtag._resources import MEMORY_LIMIT_VARIABLE
+from swarmtag._threads import default_threads
 from swarmtag.analysis import (
     ConditionRuns,
     choice_statistics,
@@ -26,9 +29,11 @@ from swarmtag.analysis import (
     summarize,
 )
 from swarmtag.analysis import bootstrap as bootstrap_module
+from swarmtag.analysis import summary as summary_module
 from swarmtag.analysis.resampling import (
     CHUNK_ELEMENTS,
     PER_VALUE_ARRAYS,
+    THREAD_BYTES,
     WORKING_ARRAYS,
     bootstrap_memory,
     condition_generator,
@@ -162,6 +167,12 @@ def test_the_estimate_follows_its_formula():
     assert bootstrap_memory(n, conditions=6, width=84) == (
         8 * (n * (6 * 9 + 45 + 3) + WORKING_ARRAYS * chunk) + fixed(6, 84)
     )
+    # 2 conditions at once on 2 threads: two conditions' curve values, temporaries and chunks.
+    assert bootstrap_memory(n, conditions=2, width=84, threads=2) == (
+        8 * (n * (2 * 9 + 2 * 41 + 2 * 3) + 2 * WORKING_ARRAYS * chunk)
+        + fixed(2, 84)
+        + THREAD_BYTES
+    )
     # Choice statistics: 4 means per condition, no curves, no comparisons; tiny B, tiny chunk.
     choices = bootstrap_memory(10, conditions=3, width=5, metrics=4, curve_points=0, comparisons=0)
     assert choices == 8 * (10 * (12 + 3) + WORKING_ARRAYS * 50) + fixed(3, 5)
@@ -179,7 +190,8 @@ def test_the_estimate_bounds_what_summarize_allocates(n_resamples):
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    estimate = bootstrap_memory(n_resamples, conditions=2, width=84)
+    threads = min(2, default_threads())  # summarize's: one a condition, at most one a core
+    estimate = bootstrap_memory(n_resamples, conditions=2, width=84, threads=threads)
     assert peak <= estimate
     if n_resamples > 1000:
         assert peak >= estimate / 3  # and not a wild overestimate
@@ -247,3 +259,14 @@ def test_an_interrupt_between_chunks_is_not_swallowed(monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         condition_statistics(runs, n_resamples=100, _chunk_elements=len(runs.carrier) * 10)
     assert len(calls) == 2  # stopped at the chunk it was interrupted in
+
+
+def test_conditions_share_the_threads_that_the_memory_holds(monkeypatch):
+    monkeypatch.setenv("SWARMTAG_THREADS", "4")
+    need = functools.partial(bootstrap_memory, 20_000, conditions=6, width=84)
+    for limit, threads in [(need(threads=5), 4), (need(threads=3), 3), (need(threads=2) - 1, 1)]:
+        monkeypatch.setenv(MEMORY_LIMIT_VARIABLE, str(limit))
+        assert summary_module._threads(20_000, conditions=6, width=84) == threads
+    monkeypatch.setenv(MEMORY_LIMIT_VARIABLE, str(need() - 1))
+    with pytest.raises(ResourceError, match="over 6 conditions needs about"):
+        summary_module._threads(20_000, conditions=6, width=84)

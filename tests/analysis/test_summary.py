@@ -160,3 +160,19 @@ def test_report_keeps_its_settings():
     assert [s.condition for s in report.conditions] == ["b", "a"]
     with pytest.raises(StatisticsError, match="no condition"):
         report.condition("c")
+
+
+def test_the_report_is_the_same_on_one_thread_and_on_several(monkeypatch):
+    log = _log(["proximity", "urgency:alpha=0.7", "urgency:alpha=3.0", "weighted:w=0.5"])
+    reports = []
+    for threads in ("1", "3"):
+        monkeypatch.setenv("SWARMTAG_THREADS", threads)
+        reports.append(summarize(log, n_resamples=500, seed=4))
+    one, several = reports
+    assert json.dumps(one.to_json()) == json.dumps(several.to_json())
+    for first, second in zip(one.conditions, several.conditions, strict=True):
+        for metric in METRICS:
+            assert (
+                first.estimate(metric).bootstrap_distribution.tobytes()
+                == second.estimate(metric).bootstrap_distribution.tobytes()
+            )

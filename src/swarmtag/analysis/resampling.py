@@ -50,6 +50,7 @@ __all__ = [
     "PERCENTILE_ROWS",
     "PER_VALUE_ARRAYS",
     "ROW_VALUES",
+    "THREAD_BYTES",
     "WORKING_ARRAYS",
     "bootstrap_memory",
     "condition_generator",
@@ -75,6 +76,10 @@ ROW_VALUES: Final = 8
 PER_VALUE_ARRAYS: Final = 80
 """Float64 arrays per carrier (log row) of a condition: its per-run values, its sorted values
 and the kernels' copies of them (measured: about 60, at 10 resamples of the example trial)."""
+THREAD_BYTES: Final = 32 * 1024
+"""Bytes each condition bootstrapped beside the first adds whatever the resamples: its thread's
+bookkeeping and the condition's small fixed arrays (measured: about 20 KiB at 10 resamples of
+the example trial, where they are most of the peak)."""
 _FLOAT: Final = 8
 """Bytes of one float64 bootstrap value."""
 _PERCENTILE_TEMPORARIES: Final = 3
@@ -90,6 +95,7 @@ def bootstrap_memory(
     metrics: int = len(METRICS) + len(OPTIONAL_METRICS),
     curve_points: int = len(CURVE_THRESHOLDS) + len(LATENCY_PERCENTILES),
     comparisons: int | None = None,
+    threads: int = 1,
 ) -> int:
     """Bytes a bootstrap of ``n_resamples`` over ``conditions`` conditions needs at its peak.
 
@@ -109,15 +115,18 @@ def bootstrap_memory(
     ``width``, if one resample is wider), or, where resamples are narrow and
     a chunk holds many of them, ``M + K + ROW_VALUES`` values per resample
     of the chunk (its sums and percentiles), whichever is more; and the
-    per-carrier bookkeeping. Not counted: the interpreter and libraries
+    per-carrier bookkeeping. Conditions bootstrapped at once on ``threads``
+    threads (``T``) each hold their own curve values, temporaries and chunk,
+    and each thread beyond the first ``THREAD_BYTES`` of bookkeeping.
+    Not counted: the interpreter and libraries
     (scipy.stats, loaded on first use, takes about 85 MiB; numba, where the
     compiled kernels run, some more) and a few MiB of fixed bookkeeping
     (``PERCENTILE_ROWS``), which every command pays whatever it asks::
 
-        8 * B * (C * M + max(K, P * M) + 3)
-          + 8 * max(WORKING_ARRAYS * min(B * width, max(CHUNK_ELEMENTS, width)),
-                    (M + K + ROW_VALUES) * min(B, CHUNK_ELEMENTS // width))
-          + 8 * PER_VALUE_ARRAYS * C * width
+        8 * B * (C * M + max(T * K, P * M) + 3 * T)
+          + 8 * T * max(WORKING_ARRAYS * min(B * width, max(CHUNK_ELEMENTS, width)),
+                        (M + K + ROW_VALUES) * min(B, CHUNK_ELEMENTS // width))
+          + 8 * PER_VALUE_ARRAYS * C * width + (T - 1) * THREAD_BYTES
 
     >>> from swarmtag._resources import format_bytes
     >>> format_bytes(bootstrap_memory(1_000_000_000, conditions=3, width=100))
@@ -127,13 +136,13 @@ def bootstrap_memory(
     """
     others = conditions - 1 if comparisons is None else comparisons
     kept = conditions * metrics
-    transient = max(curve_points, others * metrics) + _PERCENTILE_TEMPORARIES
+    transient = max(threads * curve_points, others * metrics) + threads * _PERCENTILE_TEMPORARIES
     chunk = min(n_resamples * width, max(CHUNK_ELEMENTS, width))
     rows = min(n_resamples, max(1, CHUNK_ELEMENTS // max(1, width)))  # resamples in a chunk
     working = max(WORKING_ARRAYS * chunk, (metrics + curve_points + ROW_VALUES) * rows)
     bookkeeping = PER_VALUE_ARRAYS * conditions * width
-    per_request = n_resamples * (kept + transient) + working + bookkeeping
-    return _FLOAT * per_request
+    per_request = n_resamples * (kept + transient) + threads * working + bookkeeping
+    return _FLOAT * per_request + (threads - 1) * THREAD_BYTES
 
 
 def condition_seed_sequence(seed: int, condition: str) -> np.random.SeedSequence:

@@ -11,10 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Final
 
 from swarmtag._checks import check_instance, check_sequence, check_text, show
-from swarmtag._resources import check_memory
+from swarmtag._resources import check_memory, memory_limit
+from swarmtag._threads import default_threads, map_in_threads
 from swarmtag.analysis._kernels import use_compiled
 from swarmtag.analysis._validation import check_compiled, check_options
 from swarmtag.analysis.bootstrap import (
@@ -25,7 +27,7 @@ from swarmtag.analysis.bootstrap import (
 )
 from swarmtag.analysis.compare import Comparison, compare_all
 from swarmtag.analysis.kpis import CORE_METRICS
-from swarmtag.analysis.resampling import bootstrap_memory
+from swarmtag.analysis.resampling import bootstrap_memory, one_blas_thread
 from swarmtag.analysis.runs import split_conditions
 from swarmtag.errors import StatisticsError
 from swarmtag.io.tables import CarrierLog
@@ -145,6 +147,23 @@ def _conditions(count: int) -> str:
     return f"{count} condition" + ("" if count == 1 else "s")
 
 
+def _threads(n_resamples: int, *, conditions: int, width: int) -> int:
+    """Threads for the conditions' bootstraps: one a condition, up to ``default_threads()``.
+
+    Fewer where the memory available would not hold that many at once
+    (``bootstrap_memory``); where one does not fit either, the request is
+    refused (``check_memory``) before anything is drawn.
+    """
+    need = partial(bootstrap_memory, n_resamples, conditions=conditions, width=width)
+    limit = memory_limit()
+    for threads in range(min(conditions, default_threads()), 1, -1):
+        if need(threads=threads) <= limit:
+            return threads
+    estimate = need()
+    check_memory(f"--resamples {n_resamples} over {_conditions(conditions)}", estimate)
+    return 1
+
+
 def summarize(
     log: CarrierLog,
     *,
@@ -172,6 +191,9 @@ def summarize(
     What cannot fit in memory (``bootstrap_memory``: the bootstrap values
     kept for every condition and comparison) is refused with a
     ``swarmtag.errors.ResourceError`` before any resample is drawn.
+    The conditions are bootstrapped on several threads at once (one a core,
+    or ``SWARMTAG_THREADS``; fewer where memory is short): each draws from
+    its own generator, so the numbers are the same on any number of threads.
     """
     check_instance("log", log, CarrierLog, error=StatisticsError)
     check_options(n_resamples=n_resamples, seed=seed, confidence_level=confidence_level)
@@ -179,24 +201,20 @@ def summarize(
     groups = split_conditions(log)
     chosen = choose_baseline(list(groups), baseline)
     order = [chosen, *(name for name in groups if name != chosen)]
-    estimate = bootstrap_memory(
-        n_resamples,
-        conditions=len(order),
-        width=max(len(runs.carrier) for runs in groups.values()),
-    )
-    check_memory(f"--resamples {n_resamples} over {_conditions(len(order))}", estimate)
+    width = max(len(runs.carrier) for runs in groups.values())
+    threads = _threads(n_resamples, conditions=len(order), width=width)
     if compiled is None:  # one choice for all: loading the compiled kernels pays off on the sum
         compiled = use_compiled(sum(bootstrap_work(n_resamples, runs) for runs in groups.values()))
-    statistics = {
-        name: _statistics(
-            groups[name],
-            n_resamples=n_resamples,
-            seed=seed,
-            confidence_level=confidence_level,
-            compiled=compiled,
-        )
-        for name in order
-    }
+    work = partial(
+        _statistics,
+        n_resamples=n_resamples,
+        seed=seed,
+        confidence_level=confidence_level,
+        compiled=compiled,
+    )
+    with one_blas_thread():  # here, not only in each thread: one limit while they all run
+        computed = map_in_threads(work, [groups[name] for name in order], threads)
+    statistics = dict(zip(order, computed, strict=True))
     comparisons = tuple(
         comparison
         for name in order[1:]

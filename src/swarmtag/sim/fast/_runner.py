@@ -15,13 +15,13 @@ each tick can be looked at.
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, Final
 
 import numpy as np
 
 from swarmtag._interrupt import checkpoint
+from swarmtag._threads import default_threads
 from swarmtag.errors import SimulationError
 from swarmtag.io import MISSING_ID
 from swarmtag.sim.fast._docking import FAILURE_LOWERED, FAILURE_NOT_PICKED_UP
@@ -64,7 +64,7 @@ from swarmtag.sim.model.state import WorldState
 from swarmtag.sim.outputs.trajectories import TrajectoryRecorder
 from swarmtag.sim.world.wms import operator_writes
 
-__all__ = ["TagCacheFull", "default_threads", "kernel_compiled", "simulate_fast"]
+__all__ = ["TagCacheFull", "kernel_compiled", "simulate_fast"]
 
 _WORK_PER_CALL: Final = 1_000_000
 """Robot-ticks per kernel call at most (0.1-0.25 s; at least a tick): bounds Ctrl-C latency."""
@@ -102,16 +102,6 @@ def _capacity(robots: int, slots: int) -> int:
     A tick makes at most ``EVENT_SLOTS`` rows per robot and one arrival per pick-up slot.
     """
     return max(256, 4 * EVENT_SLOTS * (robots + slots))
-
-
-def default_threads() -> int:
-    """Threads the compiled backend uses: ``SWARMTAG_THREADS``, else the usable cores."""
-    text = os.environ.get("SWARMTAG_THREADS", "")
-    if text.isdigit() and int(text) >= 1:
-        return int(text)
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
 
 
 class _Streams:
