@@ -10,9 +10,11 @@ import pytest
 from swarmtag.sim.model.geometry import (
     FACE_NORMALS,
     clamp_to_box,
+    contact_depth,
     contact_push,
     contact_xy,
     length,
+    length_xy,
     ordered_sum,
     step_towards,
     turn_towards,
@@ -23,6 +25,24 @@ def test_length_is_sqrt_of_squares_not_hypot():
     v = np.array([[3e-200, 4e-200], [3.0, 4.0]])
     # hypot would give 5e-200; the contract is sqrt(x*x + y*y), which underflows to 0
     assert length(v).tolist() == [0.0, 5.0]
+    assert length_xy(v[:, 0], v[:, 1]).tolist() == [0.0, 5.0]
+
+
+@pytest.mark.parametrize("inside", [False, True], ids=["all-outside", "some-inside"])
+def test_contact_depth_is_contact_xy_s_depth_bit_for_bit(inside):
+    rng = np.random.default_rng(11)
+    dx, dy = rng.uniform(-0.6, 0.6, size=(2, 400))
+    extent = rng.choice([0.0, 0.1775, 0.355], size=400)
+    radius = np.where(extent == 0.355, 0.0, rng.choice([0.125, 0.25], size=400))
+    dx[:3], dy[:3] = 0.0, 0.0  # coincident centres
+    if not inside:
+        keep = (np.abs(dx) > extent) | (np.abs(dy) > extent)
+        dx, dy, extent, radius = dx[keep], dy[keep], extent[keep], radius[keep]
+    _, _, expected = contact_xy(dx, dy, extent, radius, 1.0)
+    depth = contact_depth(dx, dy, extent, radius)
+    assert depth.tobytes() == expected.tobytes()
+    assert (depth > 0).any()
+    assert (depth <= 0).any()
 
 
 @pytest.mark.parametrize(
@@ -137,7 +157,9 @@ def test_bearing_factor_matches_its_compiled_twin_bit_for_bit():
     heading /= length(heading)[:, None]
     heading[:3] = [1.0, 0.0]
     distance = length(offset)
-    batched = bearing_factor(offset, distance, heading, cosines, factors)
+    batched = bearing_factor(
+        offset[:, 0], offset[:, 1], distance, heading, cosines=cosines, factors=factors
+    )
     one_by_one = [
         scalar(o[0], o[1], d, h[0], h[1], cosines, factors)
         for o, d, h in zip(offset, distance, heading, strict=True)

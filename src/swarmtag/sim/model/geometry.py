@@ -26,9 +26,11 @@ __all__ = [
     "Float",
     "bearing_factor",
     "clamp_to_box",
+    "contact_depth",
     "contact_push",
     "contact_xy",
     "length",
+    "length_xy",
     "ordered_sum",
     "segment_crosses_box",
     "segment_near_point",
@@ -49,7 +51,19 @@ def length(v: Float) -> Float:
     >>> length(np.array([[3.0, 4.0], [0.0, 0.0]]))
     array([5., 0.])
     """
-    x, y = v[..., 0], v[..., 1]
+    return length_xy(v[..., 0], v[..., 1])
+
+
+def length_xy(x: Float, y: Float) -> Float:
+    """``length`` of vectors given as separate x and y arrays (no (..., 2) array made).
+
+    Where the leading axes are many and the last is 2, numpy's loops over
+    pairs cost more than the arithmetic: (R, N, C) arrays of x and y are
+    several times faster, with the same bits.
+
+    >>> length_xy(np.array([3.0, 0.0]), np.array([4.0, 0.0]))
+    array([5., 0.])
+    """
     return np.sqrt(x * x + y * y)
 
 
@@ -106,15 +120,45 @@ def turn_towards(heading: Float, target: Float, cos_step: float, sin_step: float
     return np.where((dot >= cos_step)[..., None], target, turned)
 
 
-def contact_xy(
-    dx: Float, dy: Float, extent: Float, radius: Float, tie: Float | float
-) -> tuple[Float, Float, Float]:
-    """``contact_push`` on separate x and y arrays: returns push x, push y and depth."""
+def _gap(dx: Float, dy: Float, extent: Float) -> tuple[Float, Float, Float]:
+    """The offset from the nearest point of the summed box (x, y) and its length."""
     nearest_x = np.minimum(np.maximum(dx, -extent), extent)
     nearest_y = np.minimum(np.maximum(dy, -extent), extent)
     out_x = dx - nearest_x
     out_y = dy - nearest_y
-    distance = np.sqrt(out_x * out_x + out_y * out_y)
+    return out_x, out_y, np.sqrt(out_x * out_x + out_y * out_y)
+
+
+def _overlaps(
+    dx: Float, dy: Float, extent: Float, radius: Float
+) -> tuple[Float, Float, NDArray[np.bool_]]:
+    """A centre inside the summed box: the overlap along x and along y, and which is least."""
+    overlap_x = extent + radius - np.abs(dx)
+    overlap_y = extent + radius - np.abs(dy)
+    return overlap_x, overlap_y, overlap_x <= overlap_y
+
+
+def contact_depth(dx: Float, dy: Float, extent: Float, radius: Float) -> Float:
+    """``contact_xy``'s depth alone (positive where the bodies overlap), without the push.
+
+    >>> contact_depth(np.array([0.2, 0.6]), np.array([0.0, 0.0]), np.array(0.0), np.array(0.25))
+    array([ 0.05, -0.35])
+    """
+    _, _, distance = _gap(dx, dy, extent)
+    depth_outside = radius - distance
+    outside = distance > 0
+    if outside.all():  # no centre inside the summed box (nearly every contact)
+        return depth_outside
+    overlap_x, overlap_y, along_x = _overlaps(dx, dy, extent, radius)
+    depth: Float = np.where(outside, depth_outside, np.where(along_x, overlap_x, overlap_y))
+    return depth
+
+
+def contact_xy(
+    dx: Float, dy: Float, extent: Float, radius: Float, tie: Float | float
+) -> tuple[Float, Float, Float]:
+    """``contact_push`` on separate x and y arrays: returns push x, push y and depth."""
+    out_x, out_y, distance = _gap(dx, dy, extent)
     outside = distance > 0
     depth_outside = radius - distance
     if outside.all():  # no centre inside the summed box (nearly every contact): the same values
@@ -127,9 +171,7 @@ def contact_xy(
         )
     scale = np.divide(depth_outside, distance, out=np.zeros_like(distance), where=outside)
 
-    overlap_x = extent + radius - np.abs(dx)
-    overlap_y = extent + radius - np.abs(dy)
-    along_x = overlap_x <= overlap_y
+    overlap_x, overlap_y, along_x = _overlaps(dx, dy, extent, radius)
     sign_x = np.where(dx > 0, 1.0, np.where(dx < 0, -1.0, tie))
     sign_y = np.where(dy > 0, 1.0, np.where(dy < 0, -1.0, tie))
 
@@ -222,20 +264,21 @@ def segment_near_point(start: Float, end: Float, point: Float, radius: float) ->
 
 
 def bearing_factor(
-    offset: Float, distance: Float, heading: Float, cosines: Float, factors: Float
+    dx: Float, dy: Float, distance: Float, heading: Float, *, cosines: Float, factors: Float
 ) -> Float:
-    """A bearing profile's factor for each offset seen from a robot facing ``heading``.
+    """A bearing profile's factor for each offset ``(dx, dy)`` seen from a robot facing ``heading``.
 
     ``cos(bearing) = (offset . heading) / distance`` (1 at distance 0),
     clipped to [-1, 1]; between the profile's points (``cosines`` falling
     from 1 to -1) the factor is linear in it (``swarmtag.sim.config.bearing``).
 
     >>> cosines, factors = np.array([1.0, 0.0, -1.0]), np.array([1.0, 0.5, 0.25])
-    >>> offset = np.array([[2.0, 0.0], [0.0, -3.0], [-2.0, 0.0]])
-    >>> bearing_factor(offset, length(offset), np.array([1.0, 0.0]), cosines, factors)
+    >>> dx, dy = np.array([2.0, 0.0, -2.0]), np.array([0.0, -3.0, 0.0])
+    >>> heading = np.array([1.0, 0.0])
+    >>> bearing_factor(dx, dy, length_xy(dx, dy), heading, cosines=cosines, factors=factors)
     array([1.  , 0.5 , 0.25])
     """
-    dot = offset[..., 0] * heading[..., 0] + offset[..., 1] * heading[..., 1]
+    dot = dx * heading[..., 0] + dy * heading[..., 1]
     ahead = distance > 0
     cos = np.divide(dot, distance, out=np.ones(dot.shape), where=ahead)
     cos = np.minimum(np.maximum(cos, -1.0), 1.0)

@@ -41,7 +41,7 @@ from swarmtag.sim.config.floor_map import FloorMap
 from swarmtag.sim.model.geometry import (
     FACE_NORMALS,
     Float,
-    contact_push,
+    contact_depth,
     contact_xy,
     length,
     step_towards,
@@ -340,7 +340,8 @@ def resolve(s: WorldState, proposed: Float, params: Params) -> None:
     under = s.ghost >= 0
     if under.any():
         offset = position - at_robots(s.carrier_pos, s.ghost)
-        extent, radius = body_shape(s.mode, s.target, params)
-        _, depth = contact_push(offset, extent + params.carrier_half, radius, 1.0)
+        depth = contact_depth(
+            offset[..., 0], offset[..., 1], bodies.extent + params.carrier_half, bodies.radius
+        )
         clear = under & (depth <= 0) & ~in_modes(s.mode, (Mode.DOCK, Mode.CENTRE))
         s.ghost[clear] = -1

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from swarmtag.errors import SimulationError
 from swarmtag.sim.config.warehouse import Warehouse
 from swarmtag.sim.model.events import EventKind, TickEvents
-from swarmtag.sim.model.geometry import contact_push
+from swarmtag.sim.model.geometry import contact_depth
 from swarmtag.sim.model.params import Params
 from swarmtag.sim.model.randomness import unit_vectors
 from swarmtag.sim.model.state import Scene, WorldState
@@ -115,7 +115,9 @@ def _robots_on(s: WorldState, params: Params, run: int) -> NDArray[np.bool_]:
     slots = params.floor.pickup_slots
     extent, radius = body_shape(s.mode[run], s.target[run], params)
     offset = s.robot_pos[run][:, None, :] - slots[None, :, :]  # (N, K, 2)
-    _, depth = contact_push(offset, (extent + params.carrier_half)[:, None], radius[:, None], 1.0)
+    depth = contact_depth(
+        offset[..., 0], offset[..., 1], (extent + params.carrier_half)[:, None], radius[:, None]
+    )
     on: NDArray[np.bool_] = np.asarray((depth > 0).any(axis=0))
     return on
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmtag.sim.model.geometry import FACE_NORMALS, Float, contact_push, contact_xy, length
+from swarmtag.sim.model.geometry import FACE_NORMALS, Float, contact_depth, length
 from swarmtag.sim.model.params import Params
 from swarmtag.sim.world.broad_phase import build_grid, grid_pays, near_points
 from swarmtag.sim.world.floor import clear_of_shelves
@@ -58,7 +58,7 @@ def free_faces(
         offset = points[:, :, :, None, :] - carrier_pos[:, None, None, :, :]  # (R, C, 4, C', 2)
         extent = np.full(offset.shape[:-1], params.carrier_half)
         radius = np.full(offset.shape[:-1], params.robot_radius)
-        _, depth = contact_push(offset, extent, radius, 1.0)
+        depth = contact_depth(offset[..., 0], offset[..., 1], extent, radius)
         others = ~np.eye(carriers, dtype=bool)[None, :, None, :]
         blocked = np.any((depth > 0) & obstacle[:, None, None, :] & others, axis=-1)
     free: NDArray[np.bool_] = np.logical_and(inside, np.logical_not(blocked))
@@ -84,7 +84,7 @@ def _blocked_points(
     dy = points[rows, carrier, face, 1] - carrier_pos[rows, other, 1]
     extent = np.full(dx.shape, params.carrier_half)
     radius = np.full(dx.shape, params.robot_radius)
-    _, _, depth = contact_xy(dx, dy, extent, radius, 1.0)
+    depth = contact_depth(dx, dy, extent, radius)
     hit = (depth > 0) & (other != carrier)
     blocked = np.zeros((runs, carriers, 4), dtype=bool)
     blocked[rows[hit], carrier[hit], face[hit]] = True

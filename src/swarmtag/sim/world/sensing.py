@@ -44,6 +44,7 @@ from swarmtag.sim.model.geometry import (
     Float,
     bearing_factor,
     length,
+    length_xy,
     segment_crosses_box,
     segment_near_point,
 )
@@ -215,8 +216,10 @@ def _hidden_by_robots(state: WorldState, lines: _Lines, params: Params) -> NDArr
 def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     """Detections and the updated tag caches, from ``state`` (the end of the previous tick)."""
     t = state.tick + 1
-    offset = state.carrier_pos[:, None, :, :] - state.robot_pos[:, :, None, :]  # (R, N, C, 2)
-    distance = length(offset)
+    # (R, N, C) each robot's offset to each carrier, x and y apart (``length_xy``)
+    dx = state.carrier_pos[:, None, :, 0] - state.robot_pos[:, :, None, 0]
+    dy = state.carrier_pos[:, None, :, 1] - state.robot_pos[:, :, None, 1]
+    distance = length_xy(dx, dy)
     present = state.present[:, None, :]
     if params.split:
         heard = present & (distance <= params.radio_range)
@@ -225,7 +228,7 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         if params.bearing_factor.size:
             heading = state.heading[:, :, None, :]
             factor = bearing_factor(
-                offset, distance, heading, params.bearing_cos, params.bearing_factor
+                dx, dy, distance, heading, cosines=params.bearing_cos, factors=params.bearing_factor
             )
             reach = reach * factor
         visible = present & (state.carried_by < 0)[:, None, :] & (distance <= reach)
@@ -251,15 +254,20 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     if odometry is not None:
         seen = seen + odometry[:, :, None, :]  # a sighting is kept in the robot's own frame
         believed = state.robot_pos + odometry
-    seen_pos = np.where(visible[..., None], seen, state.seen_pos)
+    seen_pos = state.seen_pos.copy()  # the new sightings written over the old (few a tick)
+    seen_pos[visible] = np.broadcast_to(seen, seen_pos.shape)[visible]
     seen_tick = np.where(visible, t, state.seen_tick)
     if params.split and params.memory_ticks > 0:
         known = (seen_tick >= 0) & (t - seen_tick <= params.memory_ticks)
         known &= present
-        measured = length(seen_pos - believed[:, :, None, :])
+        measured = length_xy(
+            seen_pos[..., 0] - believed[:, :, None, 0], seen_pos[..., 1] - believed[:, :, None, 1]
+        )
     else:
         known = visible
-        measured = distance if inputs.noise is None else length(offset + inputs.noise)
+        measured = distance
+        if inputs.noise is not None:
+            measured = length_xy(dx + inputs.noise[..., 0], dy + inputs.noise[..., 1])
     if params.look_ticks > 0:
         known, measured = looked(
             state,
