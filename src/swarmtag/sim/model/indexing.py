@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Final
 
 import numpy as np
@@ -37,25 +38,31 @@ def grid(runs: int, robots: int) -> tuple[Int, Int]:
     return np.arange(runs)[:, None], np.arange(robots)[None, :]
 
 
-def in_modes(mode: NDArray[np.int8], modes: tuple[Mode, ...]) -> NDArray[np.bool_]:
-    """Robots whose mode is one of ``modes``.
+@functools.cache
+def _mode_table(modes: tuple[Mode, ...]) -> NDArray[np.bool_]:
+    """A table indexed by mode value: True for the ``modes`` (made once per set of modes)."""
+    table = np.zeros(len(Mode), dtype=bool)
+    table[[int(m) for m in modes]] = True
+    table.flags.writeable = False
+    return table
 
-    The reference compares mode arrays with ``int(Mode.X)``, never the enum
+
+def in_modes(mode: NDArray[np.int8], modes: tuple[Mode, ...]) -> NDArray[np.bool_]:
+    """Robots whose mode is one of ``modes`` (a new array).
+
+    One lookup in a table of the modes rather than a comparison per mode:
+    on a small swarm each numpy call costs more than its work. Elsewhere the
+    reference compares mode arrays with ``int(Mode.X)``, never the enum
     member: numpy asks an operand's class for ``__array_ufunc__``, which Python
-    3.11 answers through ``EnumType.__getattr__`` (2.6 µs a comparison, about a
-    fifth of a small swarm's tick).
+    3.11 answers through ``EnumType.__getattr__`` (2.6 µs a comparison).
     """
-    result: NDArray[np.bool_] = mode == int(modes[0])
-    for other in modes[1:]:
-        result |= mode == int(other)
-    return result
+    found: NDArray[np.bool_] = _mode_table(modes)[mode]
+    return found
 
 
 def is_loaded(mode: NDArray[np.int8], target: Int) -> NDArray[np.bool_]:
     """Robots holding a carrier: lifting, transporting, releasing, or broken down with it."""
-    loaded: NDArray[np.bool_] = (in_modes(mode, LOADED_MODES) | (mode == int(Mode.BROKEN))) & (
-        target >= 0
-    )
+    loaded: NDArray[np.bool_] = in_modes(mode, (*LOADED_MODES, Mode.BROKEN)) & (target >= 0)
     return loaded
 
 

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from swarmtag.errors import InvariantError
 from swarmtag.sim.model.events import TickEvents
-from swarmtag.sim.model.geometry import contact_push
+from swarmtag.sim.model.geometry import contact_depth
 from swarmtag.sim.model.indexing import is_loaded
 from swarmtag.sim.model.params import Params
 from swarmtag.sim.model.state import WorldState
@@ -67,11 +67,11 @@ def _bodies(state: WorldState, params: Params) -> None:
             _fail(state, on_shelf, f"a robot overlaps a shelf by {into.max():.4f} m")
     robots = state.mode.shape[1]
     between = state.robot_pos[:, :, None, :] - state.robot_pos[:, None, :, :]
-    _, depth = contact_push(
-        between,
+    depth = contact_depth(
+        between[..., 0],
+        between[..., 1],
         extent[:, :, None] + extent[:, None, :],
         radius[:, :, None] + radius[:, None, :],
-        1.0,
     )
     depth[:, np.arange(robots), np.arange(robots)] = 0.0
     # A robot under a carrier that another robot has just lifted overlaps that robot's footprint.
@@ -84,11 +84,11 @@ def _bodies(state: WorldState, params: Params) -> None:
     if deep.any():
         _fail(state, deep, f"two robots overlap by {depth.max():.4f} m")
     against = state.robot_pos[:, :, None, :] - state.carrier_pos[:, None, :, :]
-    _, depth = contact_push(
-        against,
+    depth = contact_depth(
+        against[..., 0],
+        against[..., 1],
         extent[..., None] + params.carrier_half,
         np.broadcast_to(radius[..., None], against.shape[:-1]),
-        1.0,
     )
     carriers = np.arange(state.carrier_pos.shape[1])
     obstacle = (state.present & (state.carried_by < 0))[:, None, :] & (
