@@ -260,9 +260,7 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
     if params.split and params.memory_ticks > 0:
         known = (seen_tick >= 0) & (t - seen_tick <= params.memory_ticks)
         known &= present
-        measured = length_xy(
-            seen_pos[..., 0] - believed[:, :, None, 0], seen_pos[..., 1] - believed[:, :, None, 1]
-        )
+        measured = _distance_to_sightings(seen_pos, believed)
     else:
         known = visible
         measured = distance
@@ -287,6 +285,13 @@ def sense(state: WorldState, inputs: TickInputs, params: Params) -> Senses:
         seen_pos=seen_pos,
         rssi=rssi,
         odometry=odometry,
+    )
+
+
+def _distance_to_sightings(seen_pos: Float, believed: Float) -> Float:
+    """(R, N, C): from where each robot believes it stands to where it saw each carrier."""
+    return length_xy(
+        seen_pos[..., 0] - believed[:, :, None, 0], seen_pos[..., 1] - believed[:, :, None, 1]
     )
 
 
@@ -327,7 +332,7 @@ def looked(
         return known, measured
     window = looking & (seen_tick >= state.look[..., None]) & state.present[:, None, :]
     if params.memory_ticks == 0:
-        measured = np.where(looking, length(seen_pos - believed[:, :, None, :]), measured)
+        measured = np.where(looking, _distance_to_sightings(seen_pos, believed), measured)
     return known | window, measured
 
 
