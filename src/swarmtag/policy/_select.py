@@ -176,12 +176,16 @@ def _best(
         np.copyto(scores, -np.inf, where=~a)
     tie = scores == scores.max(axis=-1, keepdims=True)
     # Only rows with several best carriers need the tie rule; work on those rows alone.
+    # A row with no carrier available (every score -inf: all tied) chooses none anyway.
     several = np.count_nonzero(tie, axis=-1) > 1
+    some = None if a is None else a.any(axis=-1)
+    if some is not None:
+        several &= some
     if several.all():
         tie = _break_ties(tie, d, m)
     elif several.any():
         tie[several] = _break_ties(tie[several], d[several], m[several])
     index = np.asarray(np.argmax(tie, axis=-1), dtype=np.intp)  # the first (only) True
-    if a is not None:
-        index = np.where(a.any(axis=-1), index, np.intp(-1))
+    if some is not None:
+        index = np.where(some, index, np.intp(-1))
     return index
