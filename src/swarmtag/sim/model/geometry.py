@@ -138,6 +138,17 @@ def _overlaps(
     return overlap_x, overlap_y, overlap_x <= overlap_y
 
 
+def _depth(
+    outside: NDArray[np.bool_],
+    depth_outside: Float,
+    overlaps: tuple[Float, Float, NDArray[np.bool_]],
+) -> Float:
+    """The depth: ``radius - distance`` outside the summed box, else the least overlap."""
+    overlap_x, overlap_y, along_x = overlaps
+    depth: Float = np.where(outside, depth_outside, np.where(along_x, overlap_x, overlap_y))
+    return depth
+
+
 def contact_depth(dx: Float, dy: Float, extent: Float, radius: Float) -> Float:
     """``contact_xy``'s depth alone (positive where the bodies overlap), without the push.
 
@@ -149,9 +160,7 @@ def contact_depth(dx: Float, dy: Float, extent: Float, radius: Float) -> Float:
     outside = distance > 0
     if outside.all():  # no centre inside the summed box (nearly every contact)
         return depth_outside
-    overlap_x, overlap_y, along_x = _overlaps(dx, dy, extent, radius)
-    depth: Float = np.where(outside, depth_outside, np.where(along_x, overlap_x, overlap_y))
-    return depth
+    return _depth(outside, depth_outside, _overlaps(dx, dy, extent, radius))
 
 
 def contact_xy(
@@ -171,11 +180,12 @@ def contact_xy(
         )
     scale = np.divide(depth_outside, distance, out=np.zeros_like(distance), where=outside)
 
-    overlap_x, overlap_y, along_x = _overlaps(dx, dy, extent, radius)
+    overlaps = _overlaps(dx, dy, extent, radius)
+    overlap_x, overlap_y, along_x = overlaps
     sign_x = np.where(dx > 0, 1.0, np.where(dx < 0, -1.0, tie))
     sign_y = np.where(dy > 0, 1.0, np.where(dy < 0, -1.0, tie))
 
-    depth = np.where(outside, depth_outside, np.where(along_x, overlap_x, overlap_y))
+    depth = _depth(outside, depth_outside, overlaps)
     hit = depth > 0
     push_x = np.where(outside, out_x * scale, np.where(along_x, sign_x * overlap_x, 0.0))
     push_y = np.where(outside, out_y * scale, np.where(along_x, 0.0, sign_y * overlap_y))
