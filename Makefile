@@ -13,12 +13,13 @@ DEMO_STAMP := $(VENV)/.installed-demo
 # The package's bytecode is written once at the install (compileall writes it even where
 # PYTHONDONTWRITEBYTECODE is set): every swarmtag command, and each one the tests start, then
 # reads it instead of compiling the sources again (a quarter second a command).
-# The fast simulation kernel is compiled once per machine (about 70 s on one core for its
-# first entry point). It starts in the background as soon as numba is installed, so that it
-# overlaps the rest of the install (and, for make test, ruff and mypy); `demo` and `unit` wait
-# for it. Entry points: batched (every command) and split (one run over threads; the tests),
-# which starts once batched has cached the code they share (tests/kernel_warmup.py); and
-# statistics, the bootstrap's compiled loops (a few seconds, on the core the kernel leaves).
+# The fast simulation kernel is compiled once per machine (about 1 min for its first entry
+# point, on two processes: its last phases compile beside the rest). It starts in the
+# background as soon as numba is installed, so that it overlaps the rest of the install (and,
+# for make test, ruff and mypy); `demo` and `unit` wait for it. Entry points: batched (every
+# command) and split (one run over threads; the tests), which starts once batched has cached
+# the code they share (tests/kernel_warmup.py); and statistics, the bootstrap's compiled
+# loops (a few seconds).
 # The warm-up holds a lock in numba's cache folder while it runs: `demo` waits for it there
 # (--wait), and the tests' own warm-up (tests/conftest.py) waits for it while pytest collects.
 define install_with_warmup

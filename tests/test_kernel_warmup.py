@@ -5,7 +5,8 @@ install so that the demo's first ``simulate`` loads the bootstrap's machine
 code instead of compiling it. Checked in a numba cache folder of its own: a
 summary of simulated runs (some carriers undelivered, so the censored and
 Kaplan-Meier paths run) after the warm-up adds no file to that folder.
-And a warm-up started while another holds the cache's lock waits for it.
+And a warm-up started while another holds the cache's lock waits for it, and
+the phases compiled ahead of a cold ``batched`` warm-up are the ones it loads.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.kernel_warmup import WAITING, lock
+from tests.kernel_warmup import WAITING, ahead_signatures, lock
 
 pytest.importorskip("numba")
 
@@ -81,3 +82,17 @@ def test_a_warm_up_started_while_another_runs_waits_for_it(
         assert waiting.wait(timeout=60) == 0
     free = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=True)
     assert free.stdout == ""  # nobody holds it: no wait, nothing said
+
+
+def test_the_phases_compiled_ahead_have_the_types_a_batched_run_calls_them_with() -> None:
+    # The suite's warm-up left the batched kernel cached (the ahead process's phases with it,
+    # from a cold cache): each phase loads for the predicted types, and its cache holds one
+    # compiled version. Wrong types would be compiled here (a cache miss), or would have
+    # left two versions: the ahead process's and the one the kernel compiled itself.
+    for dispatcher, signature in ahead_signatures():
+        dispatcher.compile(signature)
+        stats = dispatcher.stats
+        assert not stats.cache_misses, dispatcher.py_func.__qualname__
+        module = dispatcher.py_func.__module__.rpartition(".")[2]
+        versions = Path(stats.cache_path).glob(f"{module}.{dispatcher.py_func.__qualname__}-*.nbc")
+        assert len(list(versions)) == 1, dispatcher.py_func.__qualname__
