@@ -4,8 +4,9 @@
 ``statistics``): ``tests/conftest.py`` warms all three before any test, so
 that every test worker loads machine code instead of compiling it again and
 a command-line test never meets the first-compilation note on stderr;
-``make`` starts the same during its install (``make demo``: ``batched`` and
-``statistics``).
+``make`` starts the kernel's as soon as numba is installed (``make demo``:
+``batched``; ``make test``: ``batched split``), and ``statistics`` once the
+package's core (scipy) is in.
 
 Each entry compiles in a process of its own, side by side. ``batched``
 compiles its phase functions first, each cached, then its own top. With
