@@ -14,8 +14,9 @@ DEMO_STAMP := $(VENV)/.installed-demo
 # PYTHONDONTWRITEBYTECODE is set): every swarmtag command, and each one the tests start, then
 # reads it instead of compiling the sources again (a quarter second a command).
 # The fast simulation kernel is compiled once per machine (about 1 min for its first entry
-# point, on two processes: its last phases compile beside the rest). numba is installed first,
-# alone (about 6 s against 11 s for the package's whole core), and the compilation starts in the
+# point, on two processes: its last phases compile beside the rest). numba and numpy are
+# installed first, alone, with pyproject.toml's bounds (about 6 s against 11 s for the package's
+# whole core; the later installs then leave them as they are), and the compilation starts in the
 # background at once, from the sources (PYTHONPATH: swarmtag is installed after it), so that it
 # overlaps the rest of the install (and, for make test, ruff and mypy); `demo` and `unit` wait
 # for it. Entry points: batched (every command) and split (one run over threads; the tests),
@@ -27,7 +28,7 @@ DEMO_STAMP := $(VENV)/.installed-demo
 define install_with_warmup
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install numba
+	$(BIN)/python -m pip install $$($(BIN)/python -m tests.kernel_warmup --requirements)
 	@echo "make: compiling the fast simulation kernel ($(1)) in the background; log: $(WARMUP_LOG)"
 	@PYTHONPATH='$(CURDIR)/src' $(BIN)/python -m tests.kernel_warmup $(1) > $(WARMUP_LOG) 2>&1 &
 	$(2) $(BIN)/python -m pip install -e '.[fast]'

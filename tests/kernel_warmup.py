@@ -297,6 +297,33 @@ def warm_ahead() -> None:
 WAITING = "make: waiting for the fast kernel's compilation (started during the install)"
 """What ``--wait`` prints when it has to wait."""
 
+KERNEL_PACKAGES = ("numpy", "numba")
+"""What the kernel's warm-up imports (``make`` installs them first, then starts it)."""
+
+
+def kernel_requirements(pyproject: Path) -> list[str]:
+    """``KERNEL_PACKAGES``' requirements as ``pyproject`` declares them (core and extras).
+
+    ``make`` installs these first, with the project's own bounds, so that the
+    install of the rest, while the kernel compiles, never replaces them.
+    """
+    import re
+    import tomllib
+
+    project = tomllib.loads(pyproject.read_text(encoding="utf-8"))["project"]
+    declared = [*project["dependencies"], *project["optional-dependencies"]["fast"]]
+    found = [
+        requirement
+        for requirement in declared
+        if (match := re.match(r"[A-Za-z0-9_.-]+", requirement))
+        and match.group().lower() in KERNEL_PACKAGES
+    ]
+    if len(found) != len(KERNEL_PACKAGES):
+        msg = f"pyproject.toml declares {found}, not one requirement each of {KERNEL_PACKAGES}"
+        raise ValueError(msg)
+    return found
+
+
 if __name__ == "__main__":
     arguments = sys.argv[1:]
     if arguments == ["--wait"]:
@@ -305,8 +332,12 @@ if __name__ == "__main__":
     if arguments == [AHEAD]:
         warm_ahead()
         sys.exit(0)
+    if arguments == ["--requirements"]:
+        print(*kernel_requirements(Path(__file__).resolve().parent.parent / "pyproject.toml"))
+        sys.exit(0)
     if not arguments or any(entry not in ENTRIES for entry in arguments):
-        sys.exit(f"usage: python -m tests.kernel_warmup {{--wait|{'|'.join(ENTRIES)} ...}}")
+        entries = "|".join(ENTRIES)
+        sys.exit(f"usage: python -m tests.kernel_warmup {{--wait|--requirements|{entries} ...}}")
     if len(arguments) == 1 and arguments[0] != "batched":
         warm(arguments[0])  # one entry: a warm-up's own process, or a cache of its own
     else:

@@ -5,8 +5,10 @@ install so that the demo's first ``simulate`` loads the bootstrap's machine
 code instead of compiling it. Checked in a numba cache folder of its own: a
 summary of simulated runs (some carriers undelivered, so the censored and
 Kaplan-Meier paths run) after the warm-up adds no file to that folder.
-And a warm-up started while another holds the cache's lock waits for it, and
-the phases compiled ahead of a cold ``batched`` warm-up are the ones it loads.
+And a warm-up started while another holds the cache's lock waits for it,
+the phases compiled ahead of a cold ``batched`` warm-up are the ones it
+loads, and the kernel's warm-up imports only what ``make`` installs before
+starting it.
 """
 
 from __future__ import annotations
@@ -18,7 +20,13 @@ from pathlib import Path
 
 import pytest
 
-from tests.kernel_warmup import WAITING, ahead_signatures, lock
+from tests.kernel_warmup import (
+    KERNEL_PACKAGES,
+    WAITING,
+    ahead_signatures,
+    kernel_requirements,
+    lock,
+)
 
 pytest.importorskip("numba")
 
@@ -96,3 +104,39 @@ def test_the_phases_compiled_ahead_have_the_types_a_batched_run_calls_them_with(
         module = dispatcher.py_func.__module__.rpartition(".")[2]
         versions = Path(stats.cache_path).glob(f"{module}.{dispatcher.py_func.__qualname__}-*.nbc")
         assert len(list(versions)) == 1, dispatcher.py_func.__qualname__
+
+
+ONLY_THE_KERNEL_PACKAGES = """
+import importlib.abc, importlib.metadata, sys
+
+allowed = {"numpy", "numba", "llvmlite", "swarmtag"}
+blocked = {
+    name
+    for name, distributions in importlib.metadata.packages_distributions().items()
+    if not {d.lower() for d in distributions} & allowed
+}
+
+
+class Blocked(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.partition(".")[0] in blocked:
+            raise ImportError(f"{name} is not installed yet when make starts the warm-up")
+
+
+sys.meta_path.insert(0, Blocked())
+from tests.kernel_warmup import ahead_signatures, warm
+
+warm("batched")
+ahead_signatures()
+"""
+
+
+def test_the_kernel_warm_up_needs_only_the_packages_make_installs_before_it() -> None:
+    # make installs kernel_requirements, starts the warm-up, then installs the rest: the
+    # batched warm-up and the ahead process's run import nothing else (scipy, rich, ...).
+    names = [
+        requirement.partition(">")[0]
+        for requirement in kernel_requirements(ROOT / "pyproject.toml")
+    ]
+    assert names == list(KERNEL_PACKAGES)
+    subprocess.run([sys.executable, "-c", ONLY_THE_KERNEL_PACKAGES], cwd=ROOT, check=True)
