@@ -24,8 +24,11 @@ def stored(out_dir, study):
 
 @pytest.fixture(scope="module")
 def cluster():
+    # The scheduler serves HTTP even without a dashboard, on 8787 unless told otherwise; a
+    # second cluster (the other pytest worker's) then warns that the port is in use, which
+    # fails the test: an ephemeral port on the loopback interface instead.
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, dashboard_address=None, processes=True
+        n_workers=2, threads_per_worker=1, dashboard_address="127.0.0.1:0", processes=True
     ) as started:
         yield started
 
