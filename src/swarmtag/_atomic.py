@@ -62,6 +62,10 @@ class WriteFailure(OutputError, OSError):
     def __str__(self) -> str:
         return f"{self.reason} while writing {self.path}"
 
+    def __reduce__(self) -> tuple[type[WriteFailure], tuple[str, str, int]]:
+        """Pickled as its three arguments (sent from a process drawing beside the command)."""
+        return (type(self), (self.reason, self.path, self.errno or errno.EIO))
+
 
 def write_failure(problem: BaseException, path: str | os.PathLike[str]) -> WriteFailure | None:
     """``problem`` as a ``WriteFailure`` of ``path`` if the device refused the write; else None."""

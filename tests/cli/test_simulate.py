@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
 import re
+import signal
 
 import numpy as np
 import pytest
@@ -392,23 +394,94 @@ def test_rows_that_repeat_others_are_left_out_with_a_note(capsys):
     assert json.loads(run(capsys, *PAPER, *THREE, "--json")[1]) == document  # JSON keeps all
 
 
-def test_tables_are_printed_before_the_pictures_are_drawn(capsys, monkeypatch, tmp_path):
+def test_a_drawing_process_killed_mid_way_fails_the_command_and_writes_nothing(
+    capsys, monkeypatch, tmp_path
+):
+    from swarmtag import _beside
     from swarmtag.sim.outputs import render
 
-    seen = []
-    real = render.snapshot
+    if not _beside.can_fork():
+        pytest.skip("draws beside on Linux only")
+
+    def killed(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGKILL)  # in the drawing process: out of memory, say
+
+    monkeypatch.setattr(render, "animate", killed)
+    code, out, err = run(
+        capsys,
+        *SMALL,
+        "--runs", "2", "--condition", "proximity",
+        "--events", str(tmp_path / "e.csv"), "--animate", str(tmp_path / "a.gif"),
+    )  # fmt: skip
+    assert code == 2
+    assert "Metrics by condition" in out  # the tables came first
+    assert err == (
+        "swarmtag: error: the process working beside the command ended before it was done "
+        "(killed by signal 9)\n"
+    )
+    assert list(tmp_path.iterdir()) == []  # all outputs or none
+
+
+def test_where_the_copies_sent_beside_do_not_fit_the_drawing_is_done_here(
+    capsys, monkeypatch, tmp_path
+):
+    from swarmtag import _beside
+    from swarmtag.cli import simulate as command
+    from swarmtag.cli._scenario import build_scenario
+    from swarmtag.sim.outputs import render
+
+    if not _beside.can_fork():
+        pytest.skip("draws beside on Linux only")
+    scenario = build_scenario(profile="base", config=None, flags={"ticks": 400}, settings=())
+    planned = {
+        beside: command._work_bytes(scenario, 1, 1, record=True, beside=beside, backend="fast")
+        for beside in (False, True)
+    }
+    assert planned[True] > planned[False]
+    drawn_in: list[int] = []
 
     def snapshot(*args, **kwargs):
-        seen.append(capsys.readouterr().out)  # what the user had read when drawing began
+        drawn_in.append(os.getpid())
         return real(*args, **kwargs)
 
+    real = render.snapshot
     monkeypatch.setattr(render, "snapshot", snapshot)
+    argv = ("--runs", "1", "--condition", "proximity", "--backend", "fast")
+    for limit, here in ((2 * planned[True], []), (sum(planned.values()) / 2, [os.getpid()])):
+        monkeypatch.setenv("SWARMTAG_MEMORY_LIMIT", str(int(limit)))
+        code, _, err = run(capsys, *SMALL, *argv, "--snapshot", str(tmp_path / "s.png"))
+        assert code == 0, err
+        assert drawn_in == here  # drawn beside, the list here stays empty
+        assert (tmp_path / "s.png").exists()
+
+
+@pytest.mark.parametrize("forks", [True, False], ids=["drawn beside", "drawn here"])
+def test_tables_are_printed_before_the_pictures_are_drawn(capsys, monkeypatch, tmp_path, forks):
+    from swarmtag import _beside
+    from swarmtag.cli import simulate as command
+    from swarmtag.sim.outputs import render
+
+    monkeypatch.setattr(_beside, "can_fork", lambda: forks)
+    monkeypatch.setattr(command, "can_fork", lambda: forks)
+    order = tmp_path / "order.txt"  # appended to by this process and by the drawing one
+
+    def noted(what, real):
+        def call(*args, **kwargs):
+            with order.open("a") as log:
+                log.write(f"{what} {os.getpid()}\n")
+            return real(*args, **kwargs)
+
+        return call
+
+    monkeypatch.setattr(render, "snapshot", noted("snapshot", render.snapshot))
+    monkeypatch.setattr(command, "render_choices", noted("tables", command.render_choices))
     code, out, _ = run(capsys, *SMALL, "--runs", "2", "--snapshot", str(tmp_path / "s.png"))
     assert code == 0
-    assert len(seen) == 2  # one picture per condition
-    assert "Metrics by condition" in seen[0]
-    assert "Choice statistics by condition" in seen[0]
-    assert "snapshot of" not in seen[0]
+    events = [line.split() for line in order.read_text().splitlines()]
+    assert [what for what, _ in events] == ["tables", "snapshot", "snapshot"]  # one a condition
+    drawn_here = {pid for _, pid in events} == {str(os.getpid())}
+    assert drawn_here is not forks
+    assert out.index("Choice statistics by condition") < out.index("snapshot of")
     assert "snapshot of proximity run 0 at tick" in out
     assert f"{tmp_path / 's-urgency-alpha-0.7.png'}" in out
 

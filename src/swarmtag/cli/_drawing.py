@@ -9,13 +9,14 @@ event log and event table hold every condition in one file.
 
 Drawing (a GIF above all) takes longer than simulating a hundred runs, so
 ``swarmtag simulate`` prints its tables first and draws after, with a
-progress line on stderr.
+progress line on stderr: in a forked process (``swarmtag._beside``) that
+has loaded matplotlib while the runs were simulated, where it can.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
@@ -30,11 +31,21 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from swarmtag._beside import Beside
 from swarmtag._outputs import OutputPlan, Stage
+from swarmtag._plotting import pyplot
 from swarmtag.policy import Policy
-from swarmtag.sim import Scenario, simulate
+from swarmtag.sim import Scenario, SimResult, simulate
 
-__all__ = ["PER_CONDITION_HELP", "Drawn", "draw", "per_condition", "plan_outputs", "progress_bar"]
+__all__ = [
+    "PER_CONDITION_HELP",
+    "Drawing",
+    "Drawn",
+    "finish_drawing",
+    "per_condition",
+    "plan_outputs",
+    "progress_bar",
+]
 
 PER_CONDITION_HELP: Final = "With several conditions, one file per condition: STEM-<condition>{}."
 """The sentence each per-condition option's help ends with (formatted with its suffix)."""
@@ -96,67 +107,111 @@ class Drawn:
         )
 
 
-def draw(
-    scenario: Scenario,
-    policies: Sequence[Policy],
-    drawn: Drawn,
-    *,
-    seed: int,
-    run: int,
-    stage: Stage,
-    controller: str,
-    backend: str | None,
-    progress: bool = False,
-) -> list[str]:
-    """Re-run ``run`` of each condition recording it; draw and save it; say what was written."""
-    from swarmtag.sim.outputs.render import animate, snapshot  # noqa: PLC0415 - matplotlib is an extra
+class Drawing:
+    """Record ``run`` of each condition again and save its outputs (a ``swarmtag._beside.Job``).
 
-    written = []
-    several = len(policies) > 1
-    with progress_bar(show=progress, unit="steps") as bar:
-        task = bar.add_task("drawing", total=len(policies) * (1 + drawn.count))
-        for policy in policies:
-            bar.update(task, description=f"recording run {run} of {policy.name}")
-            result = simulate(
-                scenario,
+    ``recorded`` records the runs, one condition at a time; ``finish`` draws
+    and saves each (in a forked process, ``prepare`` loads matplotlib while
+    the command simulates).
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        policies: Sequence[Policy],
+        drawn: Drawn,
+        *,
+        seed: int,
+        run: int,
+        stage: Stage,
+        controller: str,
+        backend: str | None,
+    ) -> None:
+        """Draw ``drawn`` of ``run`` for each of ``policies``, into ``stage``'s paths."""
+        self._scenario, self._policies, self._drawn = scenario, list(policies), drawn
+        self._seed, self._run, self._stage = seed, run, stage
+        self._controller, self._backend = controller, backend
+
+    @property
+    def steps(self) -> int:
+        """How many steps are reported: a recording and each output, per condition."""
+        return len(self._policies) * (1 + self._drawn.count)
+
+    def recorded(self, step: Callable[[str], None]) -> Iterator[SimResult]:
+        """Each condition's ``run``, recorded, in the order of the policies."""
+        for policy in self._policies:
+            step(f"recording run {self._run} of {policy.name}")
+            yield simulate(
+                self._scenario,
                 policy,
-                seed=seed,
+                seed=self._seed,
                 runs=1,
-                run_offset=run,
+                run_offset=self._run,
                 record=True,
-                controller=controller,
-                backend=backend,
+                controller=self._controller,
+                backend=self._backend,
             )
-            bar.advance(task)
+
+    def prepare(self) -> None:
+        """Load matplotlib if pictures are asked for."""
+        if self._drawn.snapshot is not None or self._drawn.animation is not None:
+            pyplot()
+
+    def finish(self, items: Iterable[SimResult], step: Callable[[str], None]) -> list[str]:
+        """Draw and save the outputs of each recorded run, calling ``step`` as each starts."""
+        from swarmtag.sim.outputs.render import animate, snapshot  # noqa: PLC0415 - plot extra
+
+        drawn, run, stage = self._drawn, self._run, self._stage
+        several = len(self._policies) > 1
+        written = []
+        for policy, result in zip(self._policies, items, strict=True):
             traj = result.trajectories
             assert traj is not None
             if drawn.snapshot is not None:
-                bar.update(task, description=f"drawing the snapshot of {policy.name}")
+                step(f"drawing the snapshot of {policy.name}")
                 target = per_condition(drawn.snapshot, policy, several)
                 tick = snapshot(traj, stage.path(target), run=run)
                 written.append(f"snapshot of {policy.name} run {run} at tick {tick}: {target}")
-                bar.advance(task)
             if drawn.animation is not None:
-                bar.update(task, description=f"animating {policy.name}")
+                step(f"animating {policy.name}")
                 target = per_condition(drawn.animation, policy, several)
                 frames = animate(traj, stage.path(target), run=run)
                 written.append(f"animation of {policy.name} run {run} ({frames} frames): {target}")
-                bar.advance(task)
             if drawn.trajectories is not None:
+                step(f"saving the trajectories of {policy.name}")
                 target = per_condition(drawn.trajectories, policy, several)
                 traj.save(stage.path(target))
                 written.append(
                     f"trajectories of {policy.name} run {run} ({traj.ticks} ticks): {target}"
                 )
-                bar.advance(task)
             if drawn.mcap is not None:
                 from swarmtag.sim.outputs.mcap import write_mcap  # noqa: PLC0415 - rosbags extra
 
-                bar.update(task, description=f"writing the MCAP of {policy.name}")
+                step(f"writing the MCAP of {policy.name}")
                 target = per_condition(drawn.mcap, policy, several)
                 ticks = write_mcap(
                     stage.path(target), traj, result.carriers, result.events, run=run
                 )
                 written.append(f"MCAP of {policy.name} run {run} ({ticks} ticks): {target}")
+        return written
+
+
+def finish_drawing(drawing: Drawing, beside: Beside | None, *, progress: bool) -> list[str]:
+    """Record the drawn runs here and draw them (``beside``, or here too) with a progress line."""
+    with progress_bar(show=progress, unit="steps") as bar:
+        task = bar.add_task("drawing", total=drawing.steps)
+        started = False
+
+        def step(what: str) -> None:
+            nonlocal started
+            if started:
                 bar.advance(task)
-    return written
+            started = True
+            bar.update(task, description=what)
+
+        if beside is None:
+            drawing.prepare()
+            return drawing.finish(drawing.recorded(step), step)
+        for result in drawing.recorded(step):
+            beside.send(result, step)
+        return beside.finish(step)

@@ -13,11 +13,19 @@ from typing import Final
 import click
 from rich.console import Console
 
+from swarmtag._beside import beside, can_fork
 from swarmtag._checks import MAX_RUN_INDEX, MAX_SEED
 from swarmtag._outputs import OutputPlan
-from swarmtag._resources import check_memory
+from swarmtag._resources import check_memory, memory_limit
 from swarmtag.cli._console import make_console
-from swarmtag.cli._drawing import PER_CONDITION_HELP, Drawn, draw, plan_outputs, progress_bar
+from swarmtag.cli._drawing import (
+    PER_CONDITION_HELP,
+    Drawing,
+    Drawn,
+    finish_drawing,
+    plan_outputs,
+    progress_bar,
+)
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
 from swarmtag.cli._report import render_choices, render_report
 from swarmtag.cli._scenario import (
@@ -48,6 +56,9 @@ DEFAULT_CONDITIONS: Final = ("proximity", "urgency:alpha=0.7")
 """Conditions run when none is named: the published baseline and the proposed policy."""
 CHUNK_RUNS: Final = 50
 """Runs simulated per call: bounds memory and paces the progress bar (results do not change)."""
+RECORDED_COPIES_BESIDE: Final = 5
+"""A recorded run drawn beside: the command's and its pickle, then in the drawing process the
+pickle, the run and the one drawn before it."""
 COMPILE_NOTE: Final = "compiling the fast kernel (first run only, about 1-2 min)"
 """The progress line while numba compiles the kernel (measured: 1.5-3 min on one core)."""
 
@@ -89,6 +100,22 @@ def _policies(
     return chosen
 
 
+def _work_bytes(
+    scenario: Scenario, conditions: int, runs: int, *, record: bool, beside: bool, backend: str
+) -> float:
+    """Bytes the command plans: every condition's log, and a batch or the recorded run.
+
+    The recorded run is made after the batches; drawn ``beside`` (in a forked
+    process, ``swarmtag._beside``) it is also sent there: held by the
+    command and its pickle, then by the drawing process with the run before.
+    """
+    recorded = batch_memory(scenario, 1, record=record, backend=backend)
+    return conditions * runs * scenario.carriers * LOG_BYTES_PER_CARRIER + max(
+        batch_memory(scenario, min(runs, CHUNK_RUNS), backend=backend),
+        (RECORDED_COPIES_BESIDE if beside else 1) * recorded,
+    )
+
+
 def _check_work(
     scenario: Scenario,
     conditions: int,
@@ -96,6 +123,7 @@ def _check_work(
     run_offset: int,
     *,
     record: bool = False,
+    beside: bool = False,
     backend: str = "reference",
 ) -> None:
     """Refuse run counts whose logs (and a recorded run, ``record``) cannot fit in memory."""
@@ -104,11 +132,7 @@ def _check_work(
         raise ConfigError(msg)
     check_memory(
         f"--runs {runs} of {conditions} condition(s) with {scenario.carriers} carriers",
-        conditions * runs * scenario.carriers * LOG_BYTES_PER_CARRIER
-        + max(
-            batch_memory(scenario, min(runs, CHUNK_RUNS), backend=backend),
-            batch_memory(scenario, 1, record=record, backend=backend),
-        ),
+        _work_bytes(scenario, conditions, runs, record=record, beside=beside, backend=backend),
         error=ConfigError,
     )
 
@@ -336,7 +360,23 @@ def simulate_cmd(
     resolved = backend_for(controller, backend).name
     if resolved == "fast" and all(not p.compiled for p in policies):
         resolved = "reference"  # every condition falls back (simulate says so)
-    _check_work(scenario, len(policies), runs, run_offset, record=drawn.count > 0, backend=resolved)
+    # matplotlib loads in a forked process while the batches run, where the copies of the
+    # recorded run this takes fit in memory (else the drawing is done here, after them)
+    draw_beside = (
+        drawn.count > 0
+        and can_fork()
+        and _work_bytes(scenario, len(policies), runs, record=True, beside=True, backend=resolved)
+        <= memory_limit()
+    )
+    _check_work(
+        scenario,
+        len(policies),
+        runs,
+        run_offset,
+        record=drawn.count > 0,
+        beside=draw_beside,
+        backend=resolved,
+    )
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()
     show = sys.stderr.isatty() if progress is None else progress
@@ -344,53 +384,54 @@ def simulate_cmd(
     if compiling and not show:
         note_compilation(resolved)  # without a progress line, one line says why it waits
     with plan.writing() as stage:
-        log, table = run_conditions(
+        drawing = Drawing(
             scenario,
             policies,
+            drawn,
             seed=seed,
-            runs=runs,
-            run_offset=run_offset,
-            progress=show,
+            run=run_offset if draw_run is None else draw_run,
+            stage=stage,
             controller=controller,
             backend=backend,
-            compiling=compiling,
         )
-        status = Console(stderr=True).status(f"bootstrapping {resamples} resamples")
-        with status if show else nullcontext():
-            report, choices = summarize_with_choices(
-                log, table, baseline=baseline, resamples=resamples, seed=seed
-            )
-        if not as_json:  # the results first: drawing (a GIF above all) takes longer
-            line = _scenario_line(
-                scenario,
-                profile=profile,
-                runs=runs,
-                run_offset=run_offset,
-                seed=seed,
-                controller=controller,
-            )
-            console.print(line, markup=False)
-            render_report(report, console)
-            render_choices(choices, console)
-        notes = []
-        if events is not None:
-            write_event_log(log, stage.path(events))
-            notes.append(f"event log ({len(log)} rows): {events}")
-        if event_table is not None:
-            write_event_table(table, stage.path(event_table))
-            notes.append(f"event table ({len(table)} rows): {event_table}")
-        if drawn.count:
-            notes += draw(
+        with beside(drawing if draw_beside else None) as drawing_beside:
+            log, table = run_conditions(
                 scenario,
                 policies,
-                drawn,
                 seed=seed,
-                run=run_offset if draw_run is None else draw_run,
-                stage=stage,
+                runs=runs,
+                run_offset=run_offset,
+                progress=show,
                 controller=controller,
                 backend=backend,
-                progress=show,
+                compiling=compiling,
             )
+            status = Console(stderr=True).status(f"bootstrapping {resamples} resamples")
+            with status if show else nullcontext():
+                report, choices = summarize_with_choices(
+                    log, table, baseline=baseline, resamples=resamples, seed=seed
+                )
+            if not as_json:  # the results first: drawing (a GIF above all) takes longer
+                line = _scenario_line(
+                    scenario,
+                    profile=profile,
+                    runs=runs,
+                    run_offset=run_offset,
+                    seed=seed,
+                    controller=controller,
+                )
+                console.print(line, markup=False)
+                render_report(report, console)
+                render_choices(choices, console)
+            notes = []
+            if events is not None:
+                write_event_log(log, stage.path(events))
+                notes.append(f"event log ({len(log)} rows): {events}")
+            if event_table is not None:
+                write_event_table(table, stage.path(event_table))
+                notes.append(f"event table ({len(table)} rows): {event_table}")
+            if drawn.count:
+                notes += finish_drawing(drawing, drawing_beside, progress=show)
     if as_json:
         document = {**report.to_json(), "choices": [c.to_json() for c in choices]}
         click.echo(json.dumps(document, allow_nan=False))

@@ -1,0 +1,213 @@
+"""Work done beside the command in a forked process: it gets ready at once, then works on items.
+
+A command that ends with slow output (``simulate --animate``: importing
+matplotlib, then drawing the frames) can have that output's set-up done on
+the second core while its own work runs: the job's ``prepare`` starts as
+soon as the process is forked, at a lower priority, and its ``finish`` (the
+pictures themselves) works on the items the command sends it (the recorded
+runs, sent after its tables are printed). Forked, the child shares what the
+command has loaded and built; it exits with ``os._exit`` (no exit handlers:
+the command's staging folders are the command's), never sees a Ctrl-C (the
+command ends it), and sends its notes, or its error, back through a pipe.
+Where forking is not safe (no ``fork``, macOS, or other threads running in
+the command) ``start`` returns None and the caller does the work itself.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+import pickle
+import signal
+import sys
+import threading
+import traceback
+import warnings
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
+from multiprocessing.connection import Connection, wait
+from typing import Any, Final, Protocol
+
+from swarmtag._interrupt import checkpoint, deferred
+from swarmtag.errors import ResourceError
+
+__all__ = ["NICENESS", "Beside", "Job", "beside", "can_fork"]
+
+NICENESS: Final = 10
+"""How much lower the child's priority is: the command's own work gets the cores first."""
+_POLL_S: Final = 0.2
+"""Longest wait for the child without looking for a Ctrl-C the handler could not raise."""
+
+
+class Job(Protocol):
+    """Work in two parts: ``prepare`` (starts at once) and ``finish`` (on the items sent to it)."""
+
+    def prepare(self) -> None:
+        """Get ready (imports): nothing the user should see before the command's tables."""
+
+    def finish(self, items: Iterable[Any], step: Callable[[str], None]) -> list[str]:
+        """Work on ``items``, calling ``step`` as each part starts; notes of what was done."""
+
+
+def can_fork() -> bool:
+    """Whether this process can fork a child safely: Linux, and no other Python thread running.
+
+    macOS's system libraries are not safe after ``fork``; with another
+    thread running, a lock it holds would stay locked in the child.
+    """
+    return (
+        sys.platform.startswith("linux")
+        and "fork" in multiprocessing.get_all_start_methods()
+        and threading.active_count() == 1
+    )
+
+
+def _portable(error: BaseException) -> BaseException:
+    """``error`` if it survives pickling, else a ``RuntimeError`` carrying its traceback."""
+    try:
+        pickle.loads(pickle.dumps(error))  # noqa: S301 - our own bytes, just made
+    except Exception:  # noqa: BLE001 - any failure to round-trip means: send it as text
+        text = "".join(traceback.format_exception(error)).rstrip()
+        return RuntimeError(f"the process working beside the command failed:\n{text}")
+    return error
+
+
+def _received(pipe: Connection) -> Iterator[Any]:
+    """The items the command sends, until it says the end."""
+    while True:
+        match pipe.recv():
+            case ("item", item):
+                yield item
+            case _:
+                return
+
+
+def _child(job: Job, pipe: Connection) -> None:
+    """The forked process: prepare, then finish on what is sent; every outcome goes up the pipe."""
+    os.nice(NICENESS)
+    try:
+        job.prepare()
+        notes = job.finish(_received(pipe), lambda what: pipe.send(("step", what)))
+        pipe.send(("done", notes))
+    except BaseException as error:  # noqa: BLE001 - every failure is the command's to report
+        with contextlib.suppress(OSError):  # the command has gone: nobody to tell
+            pipe.send(("error", _portable(error)))
+    finally:
+        pipe.close()
+
+
+class Beside:
+    """A ``Job`` running in a forked child; use as a context manager (it is ended on exit)."""
+
+    def __init__(self, process: Any, pipe: Connection) -> None:  # noqa: ANN401 - a ForkProcess
+        """Hold the started ``process`` and this end of its ``pipe`` (use ``start``)."""
+        self._process, self._pipe = process, pipe
+
+    @classmethod
+    def start(cls, job: Job) -> Beside | None:
+        """Fork a child running ``job`` (``prepare`` at once); None where ``can_fork`` is false."""
+        if not can_fork():
+            return None
+        context = multiprocessing.get_context("fork")
+        ours, theirs = context.Pipe()
+        process = context.Process(target=_child, args=(job, theirs))
+        for stream in (sys.stdout, sys.stderr):  # or the child flushes our buffered text again
+            stream.flush()
+        with warnings.catch_warnings(), deferred():
+            # Python 3.12+ warns of native threads too (OpenBLAS's pool): those re-initialise
+            # at fork. The child starts deaf to Ctrl-C: the command ends it.
+            warnings.filterwarnings("ignore", "This process .* is multi-threaded", Warning)
+            mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+            try:
+                process.start()
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        theirs.close()
+        return cls(process, ours)
+
+    def __enter__(self) -> Beside:
+        """The running child."""
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """End the child if it still runs (an error or Ctrl-C in the command), and reap it."""
+        self.close()
+
+    def send(self, item: object, step: Callable[[str], None]) -> None:
+        """Send ``item`` to the job's ``finish`` (the steps reported so far go to ``step`` first).
+
+        An error in the child is raised here, once it has said so.
+        """
+        while self._pipe.poll():
+            self._take(self._receive(), step)
+        try:
+            self._pipe.send(("item", item))
+        except OSError:  # the child has ended: its error (or its death) says why
+            self._collect(step)
+
+    def finish(self, step: Callable[[str], None]) -> list[str]:
+        """Say the end of the items; pass on each ``step``; the job's notes, or its error raised.
+
+        A child that dies without a word (killed: out of memory) is a
+        ``ResourceError`` naming the signal or exit status.
+        """
+        with contextlib.suppress(OSError):  # ended already: _collect says why
+            self._pipe.send(("end",))
+        return self._collect(step)
+
+    def _collect(self, step: Callable[[str], None]) -> list[str]:
+        """Wait for the child's notes, passing on its steps; raise its error or its death."""
+        while True:
+            ready = wait([self._pipe, self._process.sentinel], timeout=_POLL_S)
+            checkpoint()
+            if not ready:
+                continue
+            notes = self._take(self._receive() if self._pipe in ready else None, step)
+            if notes is not None:
+                return notes
+
+    def _receive(self) -> object:
+        """The child's next message; None if it has gone (its end of the pipe closed)."""
+        try:
+            return self._pipe.recv()
+        except (EOFError, OSError):
+            return None
+
+    def _take(self, message: object, step: Callable[[str], None]) -> list[str] | None:
+        """Act on one ``message`` from the child: its notes when done, else None."""
+        match message:
+            case ("step", str(what)):
+                step(what)
+                return None
+            case ("done", list(notes)):
+                return [str(note) for note in notes]
+            case ("error", BaseException() as error):
+                raise error
+            case _:
+                raise ResourceError(self._ended())
+
+    def _ended(self) -> str:
+        """Why the child ended without a word: the signal that killed it, or its status."""
+        self._process.join()
+        code = self._process.exitcode
+        how = f"killed by signal {-code}" if code < 0 else f"exit status {code}"
+        return f"the process working beside the command ended before it was done ({how})"
+
+    def close(self) -> None:
+        """Stop the child (if still running) and release it and the pipe."""
+        if self._process.is_alive():
+            self._process.terminate()
+        self._process.join()
+        self._pipe.close()
+
+
+@contextmanager
+def beside(job: Job | None) -> Iterator[Beside | None]:
+    """``job`` started in a forked child, ended on leaving; None (do it here) if it cannot fork."""
+    started = None if job is None else Beside.start(job)
+    if started is None:
+        yield None
+        return
+    with started:
+        yield started

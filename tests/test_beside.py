@@ -1,0 +1,135 @@
+"""Work forked beside the command: items in, steps and notes out, errors and deaths raised here."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import pytest
+
+from swarmtag import _beside
+from swarmtag._atomic import WriteFailure
+from swarmtag._beside import Beside, beside, can_fork
+from swarmtag.errors import ConfigError, ResourceError
+
+pytestmark = pytest.mark.skipif(not can_fork(), reason="forks on Linux only")
+
+
+class Squares:
+    """A job that notes its process, its priority, and each item squared."""
+
+    def __init__(self, fail: BaseException | None = None, die: bool = False) -> None:
+        self.fail, self.die = fail, die
+        self.prepared_in: int | None = None
+
+    def prepare(self) -> None:
+        self.prepared_in = os.getpid()
+
+    def finish(self, items: Iterable[int], step: Callable[[str], None]) -> list[str]:
+        notes = [f"prepared in {self.prepared_in}, niceness {os.nice(0)}"]
+        for item in items:
+            step(f"squaring {item}")
+            if self.die:
+                os.kill(os.getpid(), signal.SIGKILL)
+            if self.fail is not None:
+                raise self.fail
+            notes.append(f"{item}^2 = {item * item} in {os.getpid()}")
+        return notes
+
+
+def test_items_go_to_the_child_and_its_steps_and_notes_come_back():
+    job = Squares()
+    steps: list[str] = []
+    with beside(job) as child:
+        assert child is not None
+        for item in (2, 3):
+            child.send(item, steps.append)
+        notes = child.finish(steps.append)
+    assert job.prepared_in is None  # prepared in the child, not here
+    prepared, *squares = notes
+    pid = int(squares[0].rsplit(" ", 1)[1])
+    assert pid != os.getpid()
+    assert prepared == f"prepared in {pid}, niceness {os.nice(0) + _beside.NICENESS}"
+    assert squares == [f"2^2 = 4 in {pid}", f"3^2 = 9 in {pid}"]
+    assert steps == ["squaring 2", "squaring 3"]
+
+
+def test_an_error_in_the_child_is_raised_here_as_itself():
+    with beside(Squares(fail=ConfigError("animation: bad"))) as child:
+        assert child is not None
+        child.send(1, lambda _: None)
+        with pytest.raises(ConfigError, match=r"^animation: bad$"):
+            child.finish(lambda _: None)
+
+
+def test_a_write_failure_keeps_its_target_and_errno():
+    failure = WriteFailure("no space left on device", "/out/run.gif", 28)
+    with beside(Squares(fail=failure)) as child:
+        assert child is not None
+        child.send(1, lambda _: None)
+        with pytest.raises(WriteFailure) as raised:
+            child.finish(lambda _: None)
+    assert (raised.value.path, raised.value.errno) == ("/out/run.gif", 28)
+    assert str(raised.value) == "no space left on device while writing /out/run.gif"
+
+
+class _Unpicklable(Exception):
+    def __init__(self, a: int, b: int) -> None:
+        super().__init__(f"{a} and {b}")
+
+
+def test_an_error_that_cannot_travel_comes_as_its_traceback():
+    with beside(Squares(fail=_Unpicklable(1, 2))) as child:
+        assert child is not None
+        child.send(1, lambda _: None)
+        with pytest.raises(RuntimeError, match="_Unpicklable: 1 and 2"):
+            child.finish(lambda _: None)
+
+
+def test_a_child_killed_without_a_word_is_a_resource_error():
+    with beside(Squares(die=True)) as child:
+        assert child is not None
+        child.send(1, lambda _: None)
+        with pytest.raises(ResourceError, match=r"ended before it was done \(killed by signal 9\)"):
+            child.finish(lambda _: None)
+        with pytest.raises(ResourceError, match="killed by signal 9"):  # and any later send
+            child.send(2, lambda _: None)
+
+
+class _Sleeper(Squares):
+    def prepare(self) -> None:
+        Path(os.environ["BESIDE_READY"]).touch()
+        time.sleep(60)
+
+
+def test_leaving_early_ends_the_child_at_once(tmp_path, monkeypatch):
+    monkeypatch.setenv("BESIDE_READY", str(tmp_path / "ready"))
+    began = time.monotonic()
+    with beside(_Sleeper()) as child:
+        assert child is not None
+        while not (tmp_path / "ready").exists():
+            time.sleep(0.01)
+        process = child._process  # the child itself
+    assert not process.is_alive()
+    assert process.exitcode == -signal.SIGTERM
+    assert time.monotonic() - began < 30
+
+
+def test_with_another_thread_running_the_work_stays_here():
+    release = threading.Event()
+    other = threading.Thread(target=release.wait)
+    other.start()
+    try:
+        assert not can_fork()
+        with beside(Squares()) as child:
+            assert child is None
+        assert Beside.start(Squares()) is None
+    finally:
+        release.set()
+        other.join()
+    with beside(None) as child:
+        assert child is None
