@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -107,3 +110,36 @@ def test_a_store_survives_reopening(tmp_path):
     with ResultsStore(path, read_only=True) as store:
         assert store.count_runs() == 4
         assert len(store.load_log(KEY, STUDY.conditions, 2)) == 28
+
+
+_CTRL_C_IN_DUCKDB_S_LOADING = """
+import os, signal, sys
+from swarmtag._interrupt import install
+from swarmtag.experiments.store import _duckdb
+install()
+sent = []
+def send_in_an_enum_duckdb_builds(frame, event, arg):
+    if event == "call" and not sent and "duckdb" in sys.modules and frame.f_code.co_filename.endswith("enum.py"):
+        sent.append(True)
+        os.kill(os.getpid(), signal.SIGINT)
+sys.setprofile(send_in_an_enum_duckdb_builds)
+try:
+    _duckdb()
+except KeyboardInterrupt:
+    sys.setprofile(None)
+    print("interrupted once loaded:", hasattr(sys.modules["duckdb"], "connect"), sent)
+"""
+
+
+def test_a_ctrl_c_while_duckdb_loads_is_raised_once_it_has_loaded():
+    # Raised inside the enums duckdb's native module builds, nanobind aborts the process.
+    pytest.importorskip("duckdb")
+    done = subprocess.run(
+        [sys.executable, "-c", _CTRL_C_IN_DUCKDB_S_LOADING],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == "interrupted once loaded: True [True]\n"

@@ -38,6 +38,7 @@ import numpy as np
 
 from swarmtag._atomic import write_failure_in_text
 from swarmtag._checks import check_bool, check_path_value
+from swarmtag._interrupt import deferred
 from swarmtag.errors import StoreError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
 
@@ -80,8 +81,15 @@ _NEEDS_EXTRA: Final = (
 
 
 def _duckdb() -> ModuleType:
+    """The duckdb module; a Ctrl-C while it loads is raised once it has loaded.
+
+    duckdb's native module builds Python enums as it loads: a Ctrl-C raised
+    in one of them is a fatal error for its bindings (nanobind), which abort
+    the process (exit -6, a traceback) instead of ending it with "aborted".
+    """
     try:
-        import duckdb  # noqa: PLC0415 - optional extra, imported on first use
+        with deferred():
+            import duckdb  # noqa: PLC0415 - optional extra, imported on first use
     except ImportError:  # pragma: no cover - the extra is installed in the test environment
         raise StoreError(_NEEDS_EXTRA) from None
     return duckdb
