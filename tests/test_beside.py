@@ -44,8 +44,7 @@ class Squares:
 def test_items_go_to_the_child_and_its_steps_and_notes_come_back():
     job = Squares()
     steps: list[str] = []
-    with beside(job) as child:
-        assert child is not None
+    with beside(job) as (child,):
         for item in (2, 3):
             child.send(item, steps.append)
         notes = child.finish(steps.append)
@@ -59,8 +58,7 @@ def test_items_go_to_the_child_and_its_steps_and_notes_come_back():
 
 
 def test_an_error_in_the_child_is_raised_here_as_itself():
-    with beside(Squares(fail=ConfigError("animation: bad"))) as child:
-        assert child is not None
+    with beside(Squares(fail=ConfigError("animation: bad"))) as (child,):
         child.send(1, lambda _: None)
         with pytest.raises(ConfigError, match=r"^animation: bad$"):
             child.finish(lambda _: None)
@@ -68,8 +66,7 @@ def test_an_error_in_the_child_is_raised_here_as_itself():
 
 def test_a_write_failure_keeps_its_target_and_errno():
     failure = WriteFailure("no space left on device", "/out/run.gif", 28)
-    with beside(Squares(fail=failure)) as child:
-        assert child is not None
+    with beside(Squares(fail=failure)) as (child,):
         child.send(1, lambda _: None)
         with pytest.raises(WriteFailure) as raised:
             child.finish(lambda _: None)
@@ -83,16 +80,14 @@ class _Unpicklable(Exception):
 
 
 def test_an_error_that_cannot_travel_comes_as_its_traceback():
-    with beside(Squares(fail=_Unpicklable(1, 2))) as child:
-        assert child is not None
+    with beside(Squares(fail=_Unpicklable(1, 2))) as (child,):
         child.send(1, lambda _: None)
         with pytest.raises(RuntimeError, match="_Unpicklable: 1 and 2"):
             child.finish(lambda _: None)
 
 
 def test_a_child_killed_without_a_word_is_a_resource_error():
-    with beside(Squares(die=True)) as child:
-        assert child is not None
+    with beside(Squares(die=True)) as (child,):
         child.send(1, lambda _: None)
         with pytest.raises(ResourceError, match=r"ended before it was done \(killed by signal 9\)"):
             child.finish(lambda _: None)
@@ -109,8 +104,7 @@ class _Sleeper(Squares):
 def test_leaving_early_ends_the_child_at_once(tmp_path, monkeypatch):
     monkeypatch.setenv("BESIDE_READY", str(tmp_path / "ready"))
     began = time.monotonic()
-    with beside(_Sleeper()) as child:
-        assert child is not None
+    with beside(_Sleeper()) as (child,):
         while not (tmp_path / "ready").exists():
             time.sleep(0.01)
         process = child._process  # the child itself
@@ -125,11 +119,24 @@ def test_with_another_thread_running_the_work_stays_here():
     other.start()
     try:
         assert not can_fork()
-        with beside(Squares()) as child:
-            assert child is None
+        with beside(Squares(), 2) as children:
+            assert children == []
         assert Beside.start(Squares()) is None
     finally:
         release.set()
         other.join()
-    with beside(None) as child:
-        assert child is None
+    with beside(None, 2) as children:
+        assert children == []
+
+
+def test_several_children_each_get_their_own_items():
+    steps: list[str] = []
+    with beside(Squares(), 2) as children:
+        assert len(children) == 2
+        for item in range(5):
+            children[item % 2].send(item, steps.append)
+        first, second = (child.finish(steps.append) for child in children)
+    assert [note.split(" in ")[0] for note in first[1:]] == ["0^2 = 0", "2^2 = 4", "4^2 = 16"]
+    assert [note.split(" in ")[0] for note in second[1:]] == ["1^2 = 1", "3^2 = 9"]
+    assert first[1].rsplit(" ", 1)[1] != second[1].rsplit(" ", 1)[1]  # two processes
+    assert sorted(steps) == [f"squaring {item}" for item in range(5)]

@@ -203,11 +203,16 @@ class Beside:
 
 
 @contextmanager
-def beside(job: Job | None) -> Iterator[Beside | None]:
-    """``job`` started in a forked child, ended on leaving; None (do it here) if it cannot fork."""
-    started = None if job is None else Beside.start(job)
-    if started is None:
-        yield None
-        return
-    with started:
-        yield started
+def beside(job: Job | None, count: int = 1) -> Iterator[list[Beside]]:
+    """Up to ``count`` forked children running ``job``, ended on leaving; none where none can fork.
+
+    With none, the caller does the work itself.
+    """
+    with contextlib.ExitStack() as stack:
+        children: list[Beside] = []
+        while job is not None and len(children) < count:
+            child = Beside.start(job)
+            if child is None:
+                break
+            children.append(stack.enter_context(child))
+        yield children

@@ -9,8 +9,9 @@ event log and event table hold every condition in one file.
 
 Drawing (a GIF above all) takes longer than simulating a hundred runs, so
 ``swarmtag simulate`` prints its tables first and draws after, with a
-progress line on stderr: in a forked process (``swarmtag._beside``) that
-has loaded matplotlib while the runs were simulated, where it can.
+progress line on stderr: in forked processes (``swarmtag._beside``, one a
+condition up to the cores) that loaded matplotlib while the runs were
+simulated, where it can.
 """
 
 from __future__ import annotations
@@ -111,7 +112,7 @@ class Drawing:
     """Record ``run`` of each condition again and save its outputs (a ``swarmtag._beside.Job``).
 
     ``recorded`` records the runs, one condition at a time; ``finish`` draws
-    and saves each (in a forked process, ``prepare`` loads matplotlib while
+    and saves each (in forked processes, ``prepare`` loads matplotlib while
     the command simulates).
     """
 
@@ -157,14 +158,21 @@ class Drawing:
         if self._drawn.snapshot is not None or self._drawn.animation is not None:
             pyplot()
 
-    def finish(self, items: Iterable[SimResult], step: Callable[[str], None]) -> list[str]:
-        """Draw and save the outputs of each recorded run, calling ``step`` as each starts."""
+    def finish(
+        self, items: Iterable[tuple[int, SimResult]], step: Callable[[str], None]
+    ) -> list[str]:
+        """Draw and save the outputs of each (condition index, recorded run); their notes.
+
+        ``step`` is called as each output starts; ``Drawn.count`` notes a
+        run, in the order of ``items``.
+        """
         from swarmtag.sim.outputs.render import animate, snapshot  # noqa: PLC0415 - plot extra
 
         drawn, run, stage = self._drawn, self._run, self._stage
         several = len(self._policies) > 1
         written = []
-        for policy, result in zip(self._policies, items, strict=True):
+        for index, result in items:
+            policy = self._policies[index]
             traj = result.trajectories
             assert traj is not None
             if drawn.snapshot is not None:
@@ -195,9 +203,22 @@ class Drawing:
                 written.append(f"MCAP of {policy.name} run {run} ({ticks} ticks): {target}")
         return written
 
+    def in_order(self, by_drawer: Sequence[list[str]]) -> list[str]:
+        """The notes of the drawers (condition ``i`` sent to drawer ``i % n``) by condition."""
+        per, drawers = self._drawn.count, len(by_drawer)
+        chunks: dict[int, list[str]] = {}
+        for drawer, notes in enumerate(by_drawer):
+            indices = range(drawer, len(self._policies), drawers)
+            for k, index in enumerate(indices):
+                chunks[index] = notes[k * per : (k + 1) * per]
+        return [note for index in sorted(chunks) for note in chunks[index]]
 
-def finish_drawing(drawing: Drawing, beside: Beside | None, *, progress: bool) -> list[str]:
-    """Record the drawn runs here and draw them (``beside``, or here too) with a progress line."""
+
+def finish_drawing(drawing: Drawing, drawers: Sequence[Beside], *, progress: bool) -> list[str]:
+    """Record the drawn runs here and draw them in the ``drawers``, with a progress line.
+
+    Condition ``i`` goes to drawer ``i % n``; with no drawers, it is drawn here.
+    """
     with progress_bar(show=progress, unit="steps") as bar:
         task = bar.add_task("drawing", total=drawing.steps)
         started = False
@@ -209,9 +230,9 @@ def finish_drawing(drawing: Drawing, beside: Beside | None, *, progress: bool) -
             started = True
             bar.update(task, description=what)
 
-        if beside is None:
+        if not drawers:
             drawing.prepare()
-            return drawing.finish(drawing.recorded(step), step)
-        for result in drawing.recorded(step):
-            beside.send(result, step)
-        return beside.finish(step)
+            return drawing.finish(enumerate(drawing.recorded(step)), step)
+        for index, result in enumerate(drawing.recorded(step)):
+            drawers[index % len(drawers)].send((index, result), step)
+        return drawing.in_order([drawer.finish(step) for drawer in drawers])

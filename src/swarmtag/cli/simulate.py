@@ -17,6 +17,7 @@ from swarmtag._beside import beside, can_fork
 from swarmtag._checks import MAX_RUN_INDEX, MAX_SEED
 from swarmtag._outputs import OutputPlan
 from swarmtag._resources import check_memory, memory_limit
+from swarmtag._threads import default_threads
 from swarmtag.cli._console import make_console
 from swarmtag.cli._drawing import (
     PER_CONDITION_HELP,
@@ -56,9 +57,10 @@ DEFAULT_CONDITIONS: Final = ("proximity", "urgency:alpha=0.7")
 """Conditions run when none is named: the published baseline and the proposed policy."""
 CHUNK_RUNS: Final = 50
 """Runs simulated per call: bounds memory and paces the progress bar (results do not change)."""
-RECORDED_COPIES_BESIDE: Final = 5
-"""A recorded run drawn beside: the command's and its pickle, then in the drawing process the
-pickle, the run and the one drawn before it."""
+RECORDED_COPIES_HERE: Final = 2
+"""A recorded run sent to a drawing process: the command's and its pickle."""
+RECORDED_COPIES_A_DRAWER: Final = 3
+"""In each drawing process: the pickle received, the run, and the one drawn before it."""
 COMPILE_NOTE: Final = "compiling the fast kernel (first run only, about 1-2 min)"
 """The progress line while numba compiles the kernel (measured: 1.5-3 min on one core)."""
 
@@ -101,19 +103,37 @@ def _policies(
 
 
 def _work_bytes(
-    scenario: Scenario, conditions: int, runs: int, *, record: bool, beside: bool, backend: str
+    scenario: Scenario, conditions: int, runs: int, *, record: bool, drawers: int, backend: str
 ) -> float:
-    """Bytes the command plans: every condition's log, and a batch or the recorded run.
+    """Bytes the command plans: every condition's log, and a batch or the recorded runs.
 
-    The recorded run is made after the batches; drawn ``beside`` (in a forked
-    process, ``swarmtag._beside``) it is also sent there: held by the
-    command and its pickle, then by the drawing process with the run before.
+    A run is recorded after the batches; drawn in ``drawers`` forked
+    processes (``swarmtag._beside``; 0: drawn here) it is sent there, and
+    each holds copies of its own.
     """
     recorded = batch_memory(scenario, 1, record=record, backend=backend)
+    copies = RECORDED_COPIES_HERE + RECORDED_COPIES_A_DRAWER * drawers if drawers else 1
     return conditions * runs * scenario.carriers * LOG_BYTES_PER_CARRIER + max(
-        batch_memory(scenario, min(runs, CHUNK_RUNS), backend=backend),
-        (RECORDED_COPIES_BESIDE if beside else 1) * recorded,
+        batch_memory(scenario, min(runs, CHUNK_RUNS), backend=backend), copies * recorded
     )
+
+
+def _drawers(scenario: Scenario, conditions: int, runs: int, drawn: Drawn, *, backend: str) -> int:
+    """How many forked processes draw (0: drawn here, after the batches).
+
+    One a condition, up to the usable cores: each loads matplotlib while the
+    batches run. As many as can fork and whose copies of the recorded runs
+    fit in memory.
+    """
+    if not drawn.count or not can_fork():
+        return 0
+    for count in range(min(conditions, default_threads()), 0, -1):
+        planned = _work_bytes(
+            scenario, conditions, runs, record=True, drawers=count, backend=backend
+        )
+        if planned <= memory_limit():
+            return count
+    return 0
 
 
 def _check_work(
@@ -123,7 +143,7 @@ def _check_work(
     run_offset: int,
     *,
     record: bool = False,
-    beside: bool = False,
+    drawers: int = 0,
     backend: str = "reference",
 ) -> None:
     """Refuse run counts whose logs (and a recorded run, ``record``) cannot fit in memory."""
@@ -132,7 +152,7 @@ def _check_work(
         raise ConfigError(msg)
     check_memory(
         f"--runs {runs} of {conditions} condition(s) with {scenario.carriers} carriers",
-        _work_bytes(scenario, conditions, runs, record=record, beside=beside, backend=backend),
+        _work_bytes(scenario, conditions, runs, record=record, drawers=drawers, backend=backend),
         error=ConfigError,
     )
 
@@ -360,21 +380,14 @@ def simulate_cmd(
     resolved = backend_for(controller, backend).name
     if resolved == "fast" and all(not p.compiled for p in policies):
         resolved = "reference"  # every condition falls back (simulate says so)
-    # matplotlib loads in a forked process while the batches run, where the copies of the
-    # recorded run this takes fit in memory (else the drawing is done here, after them)
-    draw_beside = (
-        drawn.count > 0
-        and can_fork()
-        and _work_bytes(scenario, len(policies), runs, record=True, beside=True, backend=resolved)
-        <= memory_limit()
-    )
+    drawers = _drawers(scenario, len(policies), runs, drawn, backend=resolved)
     _check_work(
         scenario,
         len(policies),
         runs,
         run_offset,
         record=drawn.count > 0,
-        beside=draw_beside,
+        drawers=drawers,
         backend=resolved,
     )
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
@@ -394,7 +407,7 @@ def simulate_cmd(
             controller=controller,
             backend=backend,
         )
-        with beside(drawing if draw_beside else None) as drawing_beside:
+        with beside(drawing, drawers) as drawing_processes:
             log, table = run_conditions(
                 scenario,
                 policies,
@@ -431,7 +444,7 @@ def simulate_cmd(
                 write_event_table(table, stage.path(event_table))
                 notes.append(f"event table ({len(table)} rows): {event_table}")
             if drawn.count:
-                notes += finish_drawing(drawing, drawing_beside, progress=show)
+                notes += finish_drawing(drawing, drawing_processes, progress=show)
     if as_json:
         document = {**report.to_json(), "choices": [c.to_json() for c in choices]}
         click.echo(json.dumps(document, allow_nan=False))
