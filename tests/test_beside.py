@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from swarmtag import _beside
@@ -140,3 +141,27 @@ def test_several_children_each_get_their_own_items():
     assert [note.split(" in ")[0] for note in second[1:]] == ["1^2 = 1", "3^2 = 9"]
     assert first[1].rsplit(" ", 1)[1] != second[1].rsplit(" ", 1)[1]  # two processes
     assert sorted(steps) == [f"squaring {item}" for item in range(5)]
+
+
+class _Sums:
+    """A job that sums each array it gets, and notes its dtype, shape and whether it may write."""
+
+    def prepare(self) -> None:
+        """Nothing to load."""
+
+    def finish(self, items: Iterable[np.ndarray], step: Callable[[str], None]) -> list[str]:
+        return [f"{a.dtype} {a.shape} {int(a.sum())} {a.flags.writeable}" for a in items]
+
+
+def test_arrays_travel_as_their_bytes_and_other_items_pickled():
+    frame = np.arange(24, dtype=np.uint8).reshape(2, 3, 4)
+    strided = np.arange(12, dtype=np.int64).reshape(3, 4)[:, ::2]  # not contiguous: pickled
+    with beside(_Sums()) as (child,):
+        for item in (frame, strided, np.float32(2.5) * np.ones(3, dtype=np.float32)):
+            child.send(item, lambda _: None)
+        notes = child.finish(lambda _: None)
+    assert notes == [
+        "uint8 (2, 3, 4) 276 False",
+        "int64 (3, 2) 30 True",
+        "float32 (3,) 7 False",
+    ]

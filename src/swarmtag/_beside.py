@@ -1,16 +1,18 @@
-"""Work done beside the command in a forked process: it gets ready at once, then works on items.
+"""Work done beside the caller in a forked process: it gets ready at once, then works on items.
 
 A command that ends with slow output (``simulate --animate``: importing
 matplotlib, then drawing the frames) can have that output's set-up done on
-the second core while its own work runs: the job's ``prepare`` starts as
-soon as the process is forked, at a lower priority, and its ``finish`` (the
-pictures themselves) works on the items the command sends it (the recorded
-runs, sent after its tables are printed). Forked, the child shares what the
-command has loaded and built; it exits with ``os._exit`` (no exit handlers:
-the command's staging folders are the command's), never sees a Ctrl-C (the
-command ends it), and sends its notes, or its error, back through a pipe.
-Where forking is not safe (no ``fork``, macOS, or other threads running in
-the command) ``start`` returns None and the caller does the work itself.
+another core while its own work runs: the job's ``prepare`` starts as soon
+as the process is forked, at a lower priority, and its ``finish`` (the
+pictures themselves) works on the items the caller sends it (the recorded
+runs, sent after the tables are printed; an animation's frames, sent to
+the process writing the GIF). Arrays travel as their bytes, other items
+pickled. Forked, the child shares what the caller has loaded and built; it
+exits with ``os._exit`` (no exit handlers: the command's staging folders
+are the command's), never sees a Ctrl-C (the caller ends it), and sends
+its notes, or its error, back through a pipe. Where forking is not safe
+(no ``fork``, macOS, or other threads running) there is no child and the
+caller does the work itself.
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from multiprocessing.connection import Connection, wait
 from typing import Any, Final, Protocol
+
+import numpy as np
 
 from swarmtag._interrupt import checkpoint, deferred
 from swarmtag.errors import ResourceError
@@ -79,6 +83,8 @@ def _received(pipe: Connection) -> Iterator[Any]:
         match pipe.recv():
             case ("item", item):
                 yield item
+            case ("array", str(dtype), tuple(shape)):
+                yield np.frombuffer(pipe.recv_bytes(), dtype=np.dtype(dtype)).reshape(shape)
             case _:
                 return
 
@@ -142,7 +148,11 @@ class Beside:
         while self._pipe.poll():
             self._take(self._receive(), step)
         try:
-            self._pipe.send(("item", item))
+            if isinstance(item, np.ndarray) and item.flags.c_contiguous:  # its bytes, unpickled
+                self._pipe.send(("array", item.dtype.str, item.shape))
+                self._pipe.send_bytes(item.data.cast("B"))
+            else:
+                self._pipe.send(("item", item))
         except OSError:  # the child has ended: its error (or its death) says why
             self._collect(step)
 

@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from swarmtag.sim.outputs.movie import gif_indices, gif_palette, write_gif
+from swarmtag.sim.outputs.movie import (
+    PALETTE_SAMPLES,
+    GifDrawing,
+    gif_indices,
+    gif_palette,
+    write_gif,
+    write_gif_drawn,
+)
 
 WHITE, TINT, BLUE, RED = (255, 255, 255), (219, 233, 246), (31, 119, 180), (200, 20, 30)
 
@@ -63,3 +70,27 @@ def test_written_frames_read_back_exactly(tmp_path):
             movie.seek(k)
             assert movie.info["duration"] == 200
             np.testing.assert_array_equal(np.asarray(movie.convert("RGB")), frame[:, :, :3])
+
+
+@pytest.mark.parametrize("count", [1, 2, 8, 9, 23])
+def test_frames_drawn_samples_first_make_the_gif_of_the_frames_in_order(tmp_path, count):
+    rng = np.random.default_rng(count)
+    frames = []
+    for k in range(count):
+        frame = np.full((10, 12, 4), (*WHITE, 255), dtype=np.uint8)
+        frame[k % 10, : 1 + k % 12, :3] = rng.integers(0, 256, 3)  # a line of its own colour
+        frames.append(frame)
+    gif = GifDrawing(str(tmp_path / "drawn.gif"), count, keep=(RED,), fps=4)
+    order = gif.drawing_order()
+    assert sorted(order) == list(range(count))
+    assert order[: len(gif.sampled)] == list(gif.sampled)
+    assert len(gif.sampled) == min(count, PALETTE_SAMPLES)
+    assert {0, count - 1} <= set(gif.sampled)
+    palette = gif_palette([frames[i] for i in gif.sampled], keep=[RED])
+    write_gif(iter(frames), tmp_path / "in-order.gif", palette=palette, fps=4)
+    expected = (tmp_path / "in-order.gif").read_bytes()
+    gif.write(frames[i] for i in order)
+    assert (tmp_path / "drawn.gif").read_bytes() == expected
+    (tmp_path / "drawn.gif").unlink()
+    write_gif_drawn(gif, (frames[i] for i in order))  # written in a forked process on Linux
+    assert (tmp_path / "drawn.gif").read_bytes() == expected

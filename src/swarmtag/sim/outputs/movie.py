@@ -4,7 +4,9 @@ The GIF's palette is chosen once, from sampled frames, so every frame maps
 a colour to the same index: the still background stays byte-identical from
 frame to frame, Pillow stores only each frame's changed rectangle (its
 unchanged pixels transparent), and the file stays small. Without dithering
-a flat colour stays flat.
+a flat colour stays flat. ``GifDrawing`` takes the frames as an animation
+draws them (the palette's first); ``write_gif_drawn`` writes it in a forked
+process while they are drawn (``swarmtag._beside``), where it can.
 """
 
 # Pillow and matplotlib come with the ``plot`` extra: their imports are deferred to first use.
@@ -14,16 +16,19 @@ from __future__ import annotations
 
 import os
 import subprocess
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass
 from typing import Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmtag._beside import beside
 from swarmtag.errors import ConfigError
 
 __all__ = [
     "PALETTE_SAMPLES",
+    "GifDrawing",
     "gif_indices",
     "gif_palette",
     "require_ffmpeg",
@@ -158,6 +163,69 @@ def write_gif(
         loop=0,
         optimize=True,
     )
+
+
+@dataclass(frozen=True)
+class GifDrawing:
+    """A GIF of ``count`` frames as they are drawn: the palette's samples first, then the rest.
+
+    ``sampled`` are the positions (in the GIF) of the frames that choose the
+    palette (``gif_palette``, holding ``keep``); the drawing gives those
+    first, then every other frame in order. ``write`` writes what
+    ``write_gif`` would write from the frames in order, byte for byte.
+    """
+
+    path: str
+    count: int
+    keep: tuple[tuple[int, int, int], ...]
+    fps: int
+
+    @property
+    def sampled(self) -> tuple[int, ...]:
+        """The palette's frames: at most ``PALETTE_SAMPLES``, evenly spaced, first and last."""
+        spaced = np.linspace(0, self.count - 1, min(self.count, PALETTE_SAMPLES))
+        return tuple(int(i) for i in np.unique(spaced.round()))
+
+    def drawing_order(self) -> list[int]:
+        """The GIF's frame positions in the order the drawing gives them."""
+        sampled = self.sampled
+        return [*sampled, *(i for i in range(self.count) if i not in sampled)]
+
+    def write(self, drawn: Iterable[NDArray[np.uint8]]) -> None:
+        """Write the GIF from the RGBA frames ``drawn`` in ``drawing_order``."""
+        frames = iter(drawn)
+        samples = {position: next(frames) for position in self.sampled}
+        palette = gif_palette(list(samples.values()), keep=self.keep)
+        in_order = (samples.pop(i) if i in samples else next(frames) for i in range(self.count))
+        write_gif(in_order, self.path, palette=palette, fps=self.fps)
+
+    def prepare(self) -> None:
+        """Nothing to load first (a ``swarmtag._beside.Job``)."""
+
+    def finish(self, items: Iterable[Any], step: Callable[[str], None]) -> list[str]:
+        """``write`` from the frames sent (a ``swarmtag._beside.Job``); no notes."""
+        self.write(items)
+        return []
+
+
+def write_gif_drawn(gif: GifDrawing, drawn: Iterable[NDArray[np.uint8]]) -> None:
+    """Write ``gif`` from ``drawn``, in a forked process beside the drawing where one can fork.
+
+    The palette, the indices and Pillow's compression (about a third of an
+    animation's time) then run on another core while the frames are drawn.
+    """
+    with beside(gif) as writers:
+        if not writers:
+            gif.write(drawn)
+            return
+        (writer,) = writers
+        for frame in drawn:
+            writer.send(frame, _unreported)
+        writer.finish(_unreported)
+
+
+def _unreported(_step: str) -> None:
+    """The GIF's writer reports no steps."""
 
 
 def require_ffmpeg() -> str:

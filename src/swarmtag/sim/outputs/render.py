@@ -9,7 +9,8 @@ and its radio range dash-dotted where it falls inside the picture), robots
 as circles with a heading tick, and a dashed line from each pursuing robot
 to its chosen carrier. The figure is built once (``picture.Picture``);
 an animation redraws only the moving bodies per frame and writes the GIF
-with Pillow or the MP4 through ffmpeg (``movie``). Matplotlib is imported
+with Pillow (in a forked process beside the drawing, where it can) or the
+MP4 through ffmpeg (``movie``). Matplotlib is imported
 lazily (the ``plot`` extra).
 """
 
@@ -24,13 +25,7 @@ import numpy as np
 from swarmtag._atomic import atomic_path
 from swarmtag.errors import ConfigError
 from swarmtag.sim.model.state import Mode
-from swarmtag.sim.outputs.movie import (
-    PALETTE_SAMPLES,
-    gif_palette,
-    require_ffmpeg,
-    write_gif,
-    write_mp4,
-)
+from swarmtag.sim.outputs.movie import GifDrawing, require_ffmpeg, write_gif_drawn, write_mp4
 from swarmtag.sim.outputs.picture import PURSUING, Picture
 from swarmtag.sim.outputs.trajectories import Trajectories
 
@@ -122,13 +117,10 @@ def animate(
         picture.lay_out(frames[0])  # lay out around a drawn frame, labels included
         with atomic_path(path) as temp:
             if suffix == ".gif":
-                spaced = np.linspace(0, len(frames) - 1, min(len(frames), PALETTE_SAMPLES))
-                sampled = [frames[int(i)] for i in np.unique(spaced.round())]
-                drawn = dict(zip(sampled, picture.frames(sampled), strict=True))
-                palette = gif_palette(list(drawn.values()), keep=picture.face_colours())
-                rest = picture.frames([i for i in frames if i not in drawn])
-                every_frame = (drawn.pop(i) if i in drawn else next(rest) for i in frames)
-                write_gif(every_frame, temp, palette=palette, fps=fps)
+                keep = tuple(picture.face_colours())
+                gif = GifDrawing(os.fspath(temp), len(frames), keep, fps)
+                order = [frames[i] for i in gif.drawing_order()]
+                write_gif_drawn(gif, picture.frames(order))
             else:
                 width, height = picture.figure.canvas.get_width_height()
                 write_mp4(picture.frames(frames), temp, size=(width, height), fps=fps)
