@@ -8,6 +8,8 @@ Run: ``.venv/bin/python benchmarks/bench_render.py [--repeat K] [--before REV] [
   and with ``--animate`` drawn by the renderer of git revision ``--before`` (the
   full matplotlib redraw per frame it replaced; ``--before none`` skips it).
 - ``animate`` alone on the same recorded run, now and at ``--before``.
+- The demo's three conditions (100 runs each, ``make demo``'s first call) without and with
+  ``--snapshot`` and ``--animate`` (a picture and a GIF a condition; ``--no-demo`` skips them).
 
 Medians of wall time and of CPU time (user + system: steadier on a shared machine) go to
 ``benchmarks/results/`` (``_results.py``). The target: ``--animate`` adds at most the
@@ -36,6 +38,8 @@ from swarmtag.sim.outputs import render
 
 RENDER = "src/swarmtag/sim/outputs/render.py"
 COMMAND = ["simulate", "--runs", "1", "--condition", "urgency:alpha=0.7"]
+DEMO = ["simulate", "--runs", "100", "--condition", "proximity", "--condition", "urgency:alpha=0.7"]
+DEMO += ["--condition", "urgency:alpha=9"]
 LAUNCH_BEFORE = """import importlib.util, sys
 spec = importlib.util.spec_from_file_location("swarmtag.sim.outputs.render", sys.argv.pop(1))
 module = importlib.util.module_from_spec(spec)
@@ -94,6 +98,25 @@ def load(path: Path) -> ModuleType:
     return module
 
 
+def command_cases(
+    swarmtag: str, folder: Path, before: Path | None, *, demo: bool
+) -> dict[str, list[str]]:
+    """Each whole command timed, by its case's name (outputs go to ``folder``)."""
+    gif = str(folder / "run.gif")
+    cases = {
+        "command": [swarmtag, *COMMAND],
+        "command --animate": [swarmtag, *COMMAND, "--animate", gif],
+    }
+    if before is not None:
+        launch = [sys.executable, "-c", LAUNCH_BEFORE, str(before)]
+        cases["command --animate, before"] = [*launch, *COMMAND, "--animate", gif]
+    if demo:
+        pictures = ["--snapshot", str(folder / "snap.png"), "--animate", gif]
+        cases["demo conditions"] = [swarmtag, *DEMO]
+        cases["demo conditions, pictures"] = [swarmtag, *DEMO, *pictures]
+    return cases
+
+
 def medians(samples: list[tuple[float, float]]) -> tuple[float, float]:
     """Median wall and median CPU seconds."""
     return (
@@ -111,19 +134,19 @@ def main() -> None:
         default="c9b9eba",
         help="git revision of the renderer to compare with (default: the full redraw); none: skip",
     )
+    parser.add_argument(
+        "--demo",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="also time the demo's three conditions with and without pictures",
+    )
     args, record = begin(parser, __file__)
     swarmtag = str(Path(sys.executable).with_name("swarmtag"))
     with tempfile.TemporaryDirectory() as name:
         folder = Path(name)
         before = None if args.before == "none" else old_renderer(args.before, folder)
         gif = str(folder / "run.gif")
-        cases = {
-            "command": [swarmtag, *COMMAND],
-            "command --animate": [swarmtag, *COMMAND, "--animate", gif],
-        }
-        if before is not None:
-            launch = [sys.executable, "-c", LAUNCH_BEFORE, str(before)]
-            cases["command --animate, before"] = [*launch, *COMMAND, "--animate", gif]
+        cases = command_cases(swarmtag, folder, before, demo=args.demo)
         timed(cases["command"])  # the compiled kernel is in numba's cache from here on
         samples: dict[str, list[tuple[float, float]]] = {case: [] for case in cases}
         for _ in range(args.repeat):  # alternately, so a slow phase of the machine hits all
@@ -165,6 +188,10 @@ def main() -> None:
         f"--animate adds {added[0]:.2f} s wall ({added[0] / plain[0]:.2f} of the command), "
         f"{added[1]:.2f} s CPU ({added[1] / plain[1]:.2f}); GIF {frames} frames, {size} bytes"
     )
+    if args.demo:
+        demo = result["demo conditions, pictures"][0] - result["demo conditions"][0]
+        record.summary.update(demo_pictures_added_wall_s=demo)
+        print(f"the demo's pictures add {demo:.2f} s wall")
     if "animate alone, before" in result:
         old, new = result["animate alone, before"], result["animate alone"]
         was = result["command --animate, before"]
