@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -110,7 +112,7 @@ def test_leaving_early_ends_the_child_at_once(tmp_path, monkeypatch):
             time.sleep(0.01)
         process = child._process  # the child itself
     assert not process.is_alive()
-    assert process.exitcode == -signal.SIGTERM
+    assert process.exitcode == 128 + signal.SIGTERM  # unwound, its own children ended
     assert time.monotonic() - began < 30
 
 
@@ -165,3 +167,75 @@ def test_arrays_travel_as_their_bytes_and_other_items_pickled():
         "int64 (3, 2) 30 True",
         "float32 (3,) 7 False",
     ]
+
+
+def _gone(pid: int, within_s: float = 20.0) -> bool:
+    """Whether process ``pid`` has ended (or is a zombie nobody reaps) within ``within_s``."""
+    end = time.monotonic() + within_s
+    while time.monotonic() < end:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except (FileNotFoundError, ProcessLookupError):
+            return True
+        if state == "Z":
+            return True
+        time.sleep(0.05)
+    return False
+
+
+class _Waiting(Squares):
+    """A job that says it is ready, then waits for items."""
+
+    def prepare(self) -> None:
+        Path(os.environ["BESIDE_READY"]).touch()
+
+
+class _Nested(Squares):
+    """A job whose finish starts a child of its own that waits for items (its pid to a file)."""
+
+    def finish(self, items: Iterable[int], step: Callable[[str], None]) -> list[str]:
+        with beside(_Sleeper()) as (grandchild,):
+            Path(os.environ["BESIDE_GRANDCHILD"]).write_text(str(grandchild._process.pid))
+            time.sleep(60)
+        return []
+
+
+def test_ending_a_child_ends_its_own_children(tmp_path, monkeypatch):
+    monkeypatch.setenv("BESIDE_READY", str(tmp_path / "ready"))
+    monkeypatch.setenv("BESIDE_GRANDCHILD", str(tmp_path / "grandchild"))
+    with beside(_Nested()) as (child,):
+        child.send(1, lambda _: None)
+        while not (tmp_path / "ready").exists() or not (tmp_path / "grandchild").exists():
+            time.sleep(0.01)
+        grandchild = int((tmp_path / "grandchild").read_text())
+    assert _gone(grandchild)
+
+
+_KILLED_CALLER = """
+import os, signal, sys, time
+from pathlib import Path
+sys.path.insert(0, sys.argv[1])
+from tests.test_beside import _Waiting
+from swarmtag._beside import beside
+with beside(_Waiting(), 2) as children:
+    while not Path(os.environ["BESIDE_READY"]).exists():
+        time.sleep(0.01)
+    print(" ".join(str(child._process.pid) for child in children), flush=True)
+    os.kill(os.getpid(), signal.SIGKILL)
+"""
+
+
+def test_children_end_when_their_caller_is_killed(tmp_path):
+    """Each child's read of the caller's pipe ends with the caller, though a sibling holds it."""
+    done = subprocess.run(
+        [sys.executable, "-c", _KILLED_CALLER, str(Path(__file__).parents[1])],
+        env={**os.environ, "BESIDE_READY": str(tmp_path / "ready")},
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == -signal.SIGKILL, done.stderr
+    pids = [int(pid) for pid in done.stdout.split()]
+    assert len(pids) == 2
+    assert all(_gone(pid) for pid in pids)

@@ -42,6 +42,11 @@ NICENESS: Final = 10
 """How much lower the child's priority is: the command's own work gets the cores first."""
 _POLL_S: Final = 0.2
 """Longest wait for the child without looking for a Ctrl-C the handler could not raise."""
+_END_S: Final = 5.0
+"""Longest wait for an ended child to unwind before it is killed."""
+_CALLER_ENDS: set[Connection] = set()
+"""This process's ends of its children's pipes: a forked child closes its copies first, so
+that each pipe ends (its reads see the end) when the process that holds it ends."""
 
 
 class Job(Protocol):
@@ -89,13 +94,24 @@ def _received(pipe: Connection) -> Iterator[Any]:
                 return
 
 
+def _ended_by_signal(signum: int, _frame: object) -> None:
+    """SIGTERM in a child: unwind (its own children are ended on the way), then exit."""
+    raise SystemExit(128 + signum)
+
+
 def _child(job: Job, pipe: Connection) -> None:
     """The forked process: prepare, then finish on what is sent; every outcome goes up the pipe."""
+    for inherited in list(_CALLER_ENDS):  # or a caller's death would not end their reads
+        inherited.close()
+    _CALLER_ENDS.clear()
+    signal.signal(signal.SIGTERM, _ended_by_signal)
     os.nice(NICENESS)
     try:
         job.prepare()
         notes = job.finish(_received(pipe), lambda what: pipe.send(("step", what)))
         pipe.send(("done", notes))
+    except SystemExit:  # ended (SIGTERM) by the caller, who wants no word back
+        raise
     except BaseException as error:  # noqa: BLE001 - every failure is the command's to report
         with contextlib.suppress(OSError):  # the command has gone: nobody to tell
             pipe.send(("error", _portable(error)))
@@ -117,6 +133,7 @@ class Beside:
             return None
         context = multiprocessing.get_context("fork")
         ours, theirs = context.Pipe()
+        _CALLER_ENDS.add(ours)
         process = context.Process(target=_child, args=(job, theirs))
         for stream in (sys.stdout, sys.stderr):  # or the child flushes our buffered text again
             stream.flush()
@@ -207,8 +224,12 @@ class Beside:
     def close(self) -> None:
         """Stop the child (if still running) and release it and the pipe."""
         if self._process.is_alive():
-            self._process.terminate()
+            self._process.terminate()  # SIGTERM: it ends its own children on the way out
+            self._process.join(_END_S)
+            if self._process.is_alive():  # pragma: no cover - stuck where no signal is taken
+                self._process.kill()
         self._process.join()
+        _CALLER_ENDS.discard(self._pipe)
         self._pipe.close()
 
 
