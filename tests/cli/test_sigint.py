@@ -149,7 +149,8 @@ def _check_metrics_outputs(folder: Path) -> None:
 
 SIMULATE = (
     "simulate --profile base --runs 4 --ticks 400 --resamples 2000 --no-progress "
-    "--events events.csv --event-table table.csv --snapshot snap.png --mcap run.mcap"
+    "--events events.csv --event-table table.csv --snapshot snap.png --animate run.gif "
+    "--mcap run.mcap"
 )
 METRICS = (
     "metrics log.csv --resamples 20000 --markdown report.md --html report.html --figures figures"
@@ -170,6 +171,8 @@ COMMANDS = [
             "table.csv",
             "snap-proximity.png",
             "snap-urgency-alpha-0.7.png",
+            "run-proximity.gif",
+            "run-urgency-alpha-0.7.gif",
             "run-proximity.mcap",
             "run-urgency-alpha-0.7.mcap",
         ),
