@@ -16,7 +16,7 @@ import pytest
 
 from swarmtag import _beside
 from swarmtag._atomic import WriteFailure
-from swarmtag._beside import Beside, beside, can_fork
+from swarmtag._beside import Beside, beside, can_fork, finish_all
 from swarmtag.errors import ConfigError, ResourceError
 
 pytestmark = pytest.mark.skipif(not can_fork(), reason="forks on Linux only")
@@ -239,3 +239,18 @@ def test_children_end_when_their_caller_is_killed(tmp_path):
     pids = [int(pid) for pid in done.stdout.split()]
     assert len(pids) == 2
     assert all(_gone(pid) for pid in pids)
+
+
+def test_finishing_several_children_raises_the_first_error_without_waiting_for_the_rest(
+    tmp_path, monkeypatch
+):
+    monkeypatch.setenv("BESIDE_READY", str(tmp_path / "ready"))
+    began = time.monotonic()
+    with (
+        beside(_Sleeper(), 1) as (sleeping,),
+        beside(Squares(fail=ConfigError("bad"))) as (failing,),
+    ):
+        failing.send(1, lambda _: None)
+        with pytest.raises(ConfigError, match="bad"):
+            finish_all([sleeping, failing], lambda _: None)
+    assert time.monotonic() - began < 30  # the sleeper (60 s) was not waited for

@@ -26,7 +26,7 @@ import sys
 import threading
 import traceback
 import warnings
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from multiprocessing.connection import Connection, wait
 from typing import Any, Final, Protocol
@@ -36,7 +36,7 @@ import numpy as np
 from swarmtag._interrupt import checkpoint, deferred
 from swarmtag.errors import ResourceError
 
-__all__ = ["NICENESS", "Beside", "Job", "beside", "can_fork"]
+__all__ = ["NICENESS", "Beside", "Job", "beside", "can_fork", "finish_all"]
 
 NICENESS: Final = 10
 """How much lower the child's priority is: the command's own work gets the cores first."""
@@ -171,7 +171,8 @@ class Beside:
             else:
                 self._pipe.send(("item", item))
         except OSError:  # the child has ended: its error (or its death) says why
-            self._collect(step)
+            finish_all([self], step)
+            raise ResourceError(self._ended()) from None  # pragma: no cover - it said done
 
     def finish(self, step: Callable[[str], None]) -> list[str]:
         """Say the end of the items; pass on each ``step``; the job's notes, or its error raised.
@@ -179,20 +180,12 @@ class Beside:
         A child that dies without a word (killed: out of memory) is a
         ``ResourceError`` naming the signal or exit status.
         """
-        with contextlib.suppress(OSError):  # ended already: _collect says why
-            self._pipe.send(("end",))
-        return self._collect(step)
+        return finish_all([self], step)[0]
 
-    def _collect(self, step: Callable[[str], None]) -> list[str]:
-        """Wait for the child's notes, passing on its steps; raise its error or its death."""
-        while True:
-            ready = wait([self._pipe, self._process.sentinel], timeout=_POLL_S)
-            checkpoint()
-            if not ready:
-                continue
-            notes = self._take(self._receive() if self._pipe in ready else None, step)
-            if notes is not None:
-                return notes
+    def _end_items(self) -> None:
+        """Tell the child that no more items come."""
+        with contextlib.suppress(OSError):  # ended already: its error or death says why
+            self._pipe.send(("end",))
 
     def _receive(self) -> object:
         """The child's next message; None if it has gone (its end of the pipe closed)."""
@@ -231,6 +224,30 @@ class Beside:
         self._process.join()
         _CALLER_ENDS.discard(self._pipe)
         self._pipe.close()
+
+
+def finish_all(children: Sequence[Beside], step: Callable[[str], None]) -> list[list[str]]:
+    """``finish`` every child at once: each step passed on as it comes, from whichever child.
+
+    Each child's notes, in the order of ``children``; the first error (or
+    silent death) any of them reports is raised as soon as it comes.
+    """
+    for child in children:
+        child._end_items()
+    notes: dict[int, list[str]] = {}
+    while len(notes) < len(children):
+        pending = [(i, child) for i, child in enumerate(children) if i not in notes]
+        watched = [p for _, child in pending for p in (child._pipe, child._process.sentinel)]
+        ready = wait(watched, timeout=_POLL_S)
+        checkpoint()
+        for i, child in pending:
+            pipe, sentinel = child._pipe, child._process.sentinel
+            if pipe in ready or sentinel in ready:
+                # a pipe is readable until its last message is read, even once its child ended
+                done = child._take(child._receive() if pipe in ready else None, step)
+                if done is not None:
+                    notes[i] = done
+    return [notes[i] for i in range(len(children))]
 
 
 @contextmanager

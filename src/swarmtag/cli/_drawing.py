@@ -32,7 +32,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from swarmtag._beside import Beside
+from swarmtag._beside import Beside, finish_all
 from swarmtag._outputs import OutputPlan, Stage
 from swarmtag._plotting import pyplot
 from swarmtag.policy import Policy
@@ -235,4 +235,4 @@ def finish_drawing(drawing: Drawing, drawers: Sequence[Beside], *, progress: boo
             return drawing.finish(enumerate(drawing.recorded(step)), step)
         for index, result in enumerate(drawing.recorded(step)):
             drawers[index % len(drawers)].send((index, result), step)
-        return drawing.in_order([drawer.finish(step) for drawer in drawers])
+        return drawing.in_order(finish_all(drawers, step))
