@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from swarmtag._beside import can_fork
 from swarmtag._threads import default_threads
 from swarmtag.analysis import METRICS
 from swarmtag.cli import main
@@ -18,6 +19,10 @@ from swarmtag.io import read_event_log
 
 SMALL = ["--profile", "base", "--ticks", "400", "--resamples", "200", "--no-progress"]
 """The fast base world: these tests are about the command, not the model."""
+DRAWS_BESIDE = pytest.mark.skipif(
+    not can_fork(), reason="pictures are drawn in forked processes on Linux only"
+)
+"""For the tests of the drawing processes (elsewhere the command draws in its own)."""
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -395,14 +400,11 @@ def test_rows_that_repeat_others_are_left_out_with_a_note(capsys):
     assert json.loads(run(capsys, *PAPER, *THREE, "--json")[1]) == document  # JSON keeps all
 
 
+@DRAWS_BESIDE
 def test_a_drawing_process_killed_mid_way_fails_the_command_and_writes_nothing(
     capsys, monkeypatch, tmp_path
 ):
-    from swarmtag import _beside
     from swarmtag.sim.outputs import render
-
-    if not _beside.can_fork():
-        pytest.skip("draws beside on Linux only")
 
     def killed(*args, **kwargs):
         os.kill(os.getpid(), signal.SIGKILL)  # in the drawing process: out of memory, say
@@ -423,16 +425,14 @@ def test_a_drawing_process_killed_mid_way_fails_the_command_and_writes_nothing(
     assert list(tmp_path.iterdir()) == []  # all outputs or none
 
 
+@DRAWS_BESIDE
 def test_where_the_copies_sent_beside_do_not_fit_the_drawing_is_done_here(
     capsys, monkeypatch, tmp_path
 ):
-    from swarmtag import _beside
     from swarmtag.cli import simulate as command
     from swarmtag.cli._scenario import build_scenario
     from swarmtag.sim.outputs import render
 
-    if not _beside.can_fork():
-        pytest.skip("draws beside on Linux only")
     scenario = build_scenario(profile="base", config=None, flags={"ticks": 400}, settings=())
     planned = {
         drawers: command._work_bytes(scenario, 1, 1, record=True, drawers=drawers, backend="fast")
