@@ -78,8 +78,12 @@ def test_a_write_failure_keeps_its_target_and_errno():
 
 
 class _Unpicklable(Exception):
+    """An error that cannot be pickled, whoever taught exceptions to pickle (tblib does, once
+    ``distributed`` is imported: then ``__init__``'s signature alone would not stop it)."""
+
     def __init__(self, a: int, b: int) -> None:
         super().__init__(f"{a} and {b}")
+        self.held = threading.Lock()
 
 
 def test_an_error_that_cannot_travel_comes_as_its_traceback():
@@ -254,3 +258,44 @@ def test_finishing_several_children_raises_the_first_error_without_waiting_for_t
         with pytest.raises(ConfigError, match="bad"):
             finish_all([sleeping, failing], lambda _: None)
     assert time.monotonic() - began < 30  # the sleeper (60 s) was not waited for
+
+
+class Cubes:
+    """A service: answers each number asked with its cube and the process that computed it."""
+
+    def __init__(self, fail: BaseException | None = None, die: bool = False) -> None:
+        self.fail, self.die = fail, die
+
+    def prepare(self) -> None:
+        pass
+
+    def answer(self, item: int) -> tuple[int, int, int]:
+        if self.die:
+            os.kill(os.getpid(), signal.SIGKILL)
+        if self.fail is not None:
+            raise self.fail
+        return item**3, os.getpid(), os.nice(0)
+
+
+def test_a_service_answers_each_question_in_its_process():
+    assert isinstance(Cubes(), _beside.Service)
+    assert not isinstance(Squares(), _beside.Service)
+    with beside(Cubes()) as (child,):
+        answers = [child.ask(item) for item in (2, 3, 4)]
+        arrays = child.ask(np.arange(3))  # an array asked comes back as the array
+    assert [cube for cube, _, _ in answers] == [8, 27, 64]
+    assert {pid for _, pid, _ in answers} == {child._process.pid}
+    assert child._process.pid != os.getpid()
+    assert {nice for _, _, nice in answers} == {os.nice(0) + _beside.NICENESS}
+    assert arrays[0].tolist() == [0, 1, 8]
+
+
+def test_a_service_error_is_raised_at_the_question_and_a_death_is_a_resource_error():
+    died = r"ended before it was done \(killed by signal 9\)"
+    with (
+        beside(Cubes(fail=ConfigError("no cubes today"))) as (failing,),
+        pytest.raises(ConfigError, match=r"^no cubes today$"),
+    ):
+        failing.ask(1)
+    with beside(Cubes(die=True)) as (dying,), pytest.raises(ResourceError, match=died):
+        dying.ask(1)

@@ -10,7 +10,9 @@ the process writing the GIF). Arrays travel as their bytes, other items
 pickled. Forked, the child shares what the caller has loaded and built; it
 exits with ``os._exit`` (no exit handlers: the command's staging folders
 are the command's), never sees a Ctrl-C (the caller ends it), and sends
-its notes, or its error, back through a pipe. Where forking is not safe
+its notes, or its error, back through a pipe. A ``Service`` (``simulate``'s
+Mann-Whitney tests: importing scipy.stats takes half a second) answers each
+item it is asked instead (``Beside.ask``). Where forking is not safe
 (no ``fork``, macOS, or other threads running) there is no child and the
 caller does the work itself.
 """
@@ -29,14 +31,14 @@ import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from multiprocessing.connection import Connection, wait
-from typing import Any, Final, Protocol
+from typing import Any, Final, Protocol, runtime_checkable
 
 import numpy as np
 
 from swarmtag._interrupt import checkpoint, deferred
 from swarmtag.errors import ResourceError
 
-__all__ = ["NICENESS", "Beside", "Job", "beside", "can_fork", "finish_all"]
+__all__ = ["NICENESS", "Beside", "Job", "Service", "beside", "can_fork", "finish_all"]
 
 NICENESS: Final = 10
 """How much lower the child's priority is: the command's own work gets the cores first."""
@@ -57,6 +59,17 @@ class Job(Protocol):
 
     def finish(self, items: Iterable[Any], step: Callable[[str], None]) -> list[str]:
         """Work on ``items``, calling ``step`` as each part starts; notes of what was done."""
+
+
+@runtime_checkable
+class Service(Protocol):
+    """Work that answers: ``prepare`` (starts at once), then ``answer`` to each item asked."""
+
+    def prepare(self) -> None:
+        """Get ready (imports), so that the first answer comes at once."""
+
+    def answer(self, item: Any) -> Any:  # noqa: ANN401 - whatever the service answers
+        """The answer to ``item`` (pickled on its way back)."""
 
 
 def can_fork() -> bool:
@@ -99,8 +112,8 @@ def _ended_by_signal(signum: int, _frame: object) -> None:
     raise SystemExit(128 + signum)
 
 
-def _child(job: Job, pipe: Connection) -> None:
-    """The forked process: prepare, then finish on what is sent; every outcome goes up the pipe."""
+def _child(job: Job | Service, pipe: Connection) -> None:
+    """The forked process: prepare, then finish on (or answer) what is sent; all goes back."""
     for inherited in list(_CALLER_ENDS):  # or a caller's death would not end their reads
         inherited.close()
     _CALLER_ENDS.clear()
@@ -108,7 +121,12 @@ def _child(job: Job, pipe: Connection) -> None:
     os.nice(NICENESS)
     try:
         job.prepare()
-        notes = job.finish(_received(pipe), lambda what: pipe.send(("step", what)))
+        notes: list[str] = []
+        if isinstance(job, Service):
+            for item in _received(pipe):
+                pipe.send(("answer", job.answer(item)))
+        else:
+            notes = job.finish(_received(pipe), lambda what: pipe.send(("step", what)))
         pipe.send(("done", notes))
     except SystemExit:  # ended (SIGTERM) by the caller, who wants no word back
         raise
@@ -125,9 +143,10 @@ class Beside:
     def __init__(self, process: Any, pipe: Connection) -> None:  # noqa: ANN401 - a ForkProcess
         """Hold the started ``process`` and this end of its ``pipe`` (use ``start``)."""
         self._process, self._pipe = process, pipe
+        self._asking = threading.Lock()  # one question on the pipe at a time
 
     @classmethod
-    def start(cls, job: Job) -> Beside | None:
+    def start(cls, job: Job | Service) -> Beside | None:
         """Fork a child running ``job`` (``prepare`` at once); None where ``can_fork`` is false."""
         if not can_fork():
             return None
@@ -173,6 +192,25 @@ class Beside:
         except OSError:  # the child has ended: its error (or its death) says why
             finish_all([self], step)
             raise ResourceError(self._ended()) from None  # pragma: no cover - it said done
+
+    def ask(self, item: object) -> Any:  # noqa: ANN401 - whatever the service answers
+        """A ``Service``'s answer to ``item``, waited for (a Ctrl-C still taken); its error raised.
+
+        A child that dies without a word is a ``ResourceError``, as in ``finish``.
+        """
+        with self._asking:
+            self.send(item, _no_step)
+            watched = [self._pipe, self._process.sentinel]
+            while True:
+                ready = wait(watched, timeout=_POLL_S)
+                checkpoint()
+                if ready:
+                    message = self._receive() if self._pipe in ready else None
+                    match message:
+                        case ("answer", answer):
+                            return answer
+                        case _:
+                            self._take(message, _no_step)
 
     def finish(self, step: Callable[[str], None]) -> list[str]:
         """Say the end of the items; pass on each ``step``; the job's notes, or its error raised.
@@ -226,6 +264,10 @@ class Beside:
         self._pipe.close()
 
 
+def _no_step(_what: str) -> None:
+    """A service reports no steps."""
+
+
 def finish_all(children: Sequence[Beside], step: Callable[[str], None]) -> list[list[str]]:
     """``finish`` every child at once: each step passed on as it comes, from whichever child.
 
@@ -251,7 +293,7 @@ def finish_all(children: Sequence[Beside], step: Callable[[str], None]) -> list[
 
 
 @contextmanager
-def beside(job: Job | None, count: int = 1) -> Iterator[list[Beside]]:
+def beside(job: Job | Service | None, count: int = 1) -> Iterator[list[Beside]]:
     """Up to ``count`` forked children running ``job``, ended on leaving; none where none can fork.
 
     With none, the caller does the work itself.

@@ -189,3 +189,26 @@ def test_small_samples_are_tested_one_pair_at_a_time():
     expected = [mannwhitneyu(*pair).pvalue for pair in pairs[:3]]
     assert _mann_whitney_ps(pairs) == [*expected, None, None]
     assert expected[1] == mannwhitneyu(*untied, method="exact").pvalue
+
+
+def test_a_tester_given_by_mann_whitney_by_gets_the_samples_and_gives_the_p_values():
+    from swarmtag.analysis.compare import _mann_whitney_ps, mann_whitney_by, mann_whitney_ps
+
+    pairs = [([1.0, np.nan, 3.0], [2.0, 4.0]), ([np.nan], [1.0]), ([5.0, 6.0], [1.0, 2.0])]
+    asked = []
+
+    def tester(samples):
+        asked.append(samples)
+        return [0.25, None, 0.5]
+
+    with mann_whitney_by(tester):
+        assert _mann_whitney_ps(pairs) == [0.25, None, 0.5]
+        assert _mann_whitney_ps([([np.nan], [1.0])]) == [None]  # nothing to test: not asked
+    (samples,) = asked
+    assert [None if s is None else (s[0].tolist(), s[1].tolist()) for s in samples] == [
+        ([1.0, 3.0], [2.0, 4.0]),
+        None,
+        ([5.0, 6.0], [1.0, 2.0]),
+    ]
+    assert mann_whitney_ps(samples) == _mann_whitney_ps(pairs)  # outside: computed here
+    assert _mann_whitney_ps(pairs)[0] == mannwhitneyu([1.0, 3.0], [2.0, 4.0]).pvalue

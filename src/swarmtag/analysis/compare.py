@@ -27,9 +27,11 @@ from __future__ import annotations
 
 import importlib
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
-from typing import Final
+from typing import Final, TypeAlias
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -49,7 +51,9 @@ __all__ = [
     "bootstrap_p_value",
     "compare",
     "compare_all",
+    "mann_whitney_by",
     "mann_whitney_p",
+    "mann_whitney_ps",
     "smallest_mann_whitney_p",
     "undelivered_differs",
 ]
@@ -123,16 +127,46 @@ def _samples(
     return first, second
 
 
+Samples: TypeAlias = list[tuple[NDArray[np.float64], NDArray[np.float64]] | None]
+"""The tested samples of each pair (no NaN), or None where a pair has no test."""
+
+_TESTER: ContextVar[Callable[[Samples], list[float | None]] | None] = ContextVar(
+    "mann_whitney_tester", default=None
+)
+
+
+@contextmanager
+def mann_whitney_by(tester: Callable[[Samples], list[float | None]]) -> Iterator[None]:
+    """Within this block, ``tester`` computes the Mann-Whitney p-values: ``mann_whitney_ps``.
+
+    ``simulate`` hands them to a process that imported scipy.stats while the
+    command started (``swarmtag.cli._testing``); the numbers are the same.
+    """
+    token = _TESTER.set(tester)
+    try:
+        yield
+    finally:
+        _TESTER.reset(token)
+
+
 def _mann_whitney_ps(
     pairs: Sequence[tuple[ArrayLike | None, ArrayLike | None]],
 ) -> list[float | None]:
-    """``mann_whitney_p`` of each pair: the same numbers, pairs of one size in one scipy call.
+    """``mann_whitney_p`` of each pair: ``mann_whitney_ps``, or ``mann_whitney_by``'s tester."""
+    samples = [_samples(x, y) for x, y in pairs]
+    tester = _TESTER.get()
+    if tester is None or all(tested is None for tested in samples):
+        return mann_whitney_ps(samples)
+    return tester(samples)
+
+
+def mann_whitney_ps(samples: Samples) -> list[float | None]:
+    """The p-value of each pair of ``samples``: pairs of one size in one scipy call.
 
     Pairs whose samples have the same sizes, both larger than ``_EXACT_UP_TO``, go
     to one call along ``axis=1`` (scipy's per-pair arithmetic, the same bits);
     smaller ones one by one, as ties in one pair would change another's method.
     """
-    samples = [_samples(x, y) for x, y in pairs]
     ps: list[float | None] = [None] * len(samples)
     sizes: dict[tuple[int, int], list[int]] = {}
     for index, tested in enumerate(samples):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 import tempfile
@@ -26,6 +27,7 @@ from swarmtag.analysis.window import window_note
 from swarmtag.cli._console import make_console
 from swarmtag.cli._options import baseline_option, check_bootstrap_memory, resamples_option
 from swarmtag.cli._report import render_choices, render_report
+from swarmtag.cli._testing import tests_beside
 from swarmtag.errors import StatisticsError
 from swarmtag.io import CarrierLog, EventTable, read_event_log, read_event_table
 
@@ -220,13 +222,18 @@ def metrics(
             plan.file(option, path, suffixes=suffixes)
     if figures is not None:
         plan.folder("--figures", figures)
-    log = trim_warmup(read_event_log(events), start)
-    table = read_event_table(event_table) if event_table is not None else None
-    check_bootstrap_memory(resamples, len(log), len(log.conditions))
-    status = Console(stderr=True).status(
-        f"bootstrapping {resamples} resamples of {len(log.conditions)} condition(s)"
-    )
-    with plan.writing() as stage, status if sys.stderr.isatty() else nullcontext():
+    with contextlib.ExitStack() as stack:
+        # forked before the log is read: scipy.stats is imported beside it (not used for one
+        # condition: then the process is ended)
+        stack.enter_context(tests_beside(comparing=True))
+        log = trim_warmup(read_event_log(events), start)
+        table = read_event_table(event_table) if event_table is not None else None
+        check_bootstrap_memory(resamples, len(log), len(log.conditions))
+        status = Console(stderr=True).status(
+            f"bootstrapping {resamples} resamples of {len(log.conditions)} condition(s)"
+        )
+        stage = stack.enter_context(plan.writing())
+        stack.enter_context(status if sys.stderr.isatty() else nullcontext())
         report, choices = summarize_with_choices(
             log, table, baseline=baseline, resamples=resamples, seed=seed
         )

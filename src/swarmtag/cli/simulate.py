@@ -35,6 +35,7 @@ from swarmtag.cli._scenario import (
     note_compilation,
     scenario_options,
 )
+from swarmtag.cli._testing import tests_beside
 from swarmtag.cli.metrics import summarize_with_choices
 from swarmtag.errors import ConfigError
 from swarmtag.io import CarrierLog, EventTable, write_event_log, write_event_table
@@ -393,10 +394,11 @@ def simulate_cmd(
     check_bootstrap_memory(resamples, runs * scenario.carriers, len(policies))
     console = make_console()
     show = sys.stderr.isatty() if progress is None else progress
-    compiling = compile_pending(resolved)
-    if compiling and not show:
-        note_compilation(resolved)  # without a progress line, one line says why it waits
-    with plan.writing() as stage:
+    # forked before the kernel loads: scipy.stats is imported beside it
+    with tests_beside(comparing=len(policies) > 1), plan.writing() as stage:
+        compiling = compile_pending(resolved)
+        if compiling and not show:
+            note_compilation(resolved)  # without a progress line, one line says why it waits
         drawing = Drawing(
             scenario,
             policies,

@@ -13,6 +13,7 @@ import click
 from swarmtag._checks import MAX_RESAMPLES, MAX_WORKERS
 from swarmtag._inputs import check_path
 from swarmtag.cli._scenario import backend_option, note_compilation
+from swarmtag.cli._testing import tests_beside
 from swarmtag.errors import ConfigError, StudyError
 from swarmtag.sim.backends import resolve_backend
 
@@ -76,15 +77,16 @@ def run_cmd(
     spec = load_study(source)
     show = sys.stderr.isatty() if progress is None else progress
     _note([backend if backend is not None else spec.backend], scheduler)
-    result = run_study(
-        spec,
-        out_dir=out_dir,
-        quick=quick,
-        workers=workers,
-        scheduler=scheduler,
-        progress=show,
-        backend=backend,
-    )
+    with tests_beside(comparing=True):  # scipy.stats imported beside the first simulations
+        result = run_study(
+            spec,
+            out_dir=out_dir,
+            quick=quick,
+            workers=workers,
+            scheduler=scheduler,
+            progress=show,
+            backend=backend,
+        )
     click.echo(
         f"{result.study}: {result.computed_runs} runs computed, "
         f"{result.reused_runs} reused from the store"
@@ -222,17 +224,18 @@ def reproduce(
         )
 
     started = time.perf_counter()
-    done = run_all(
-        studies,
-        out_dir=out_dir,
-        seeds=seeds,
-        quick=quick,
-        workers=workers,
-        scheduler=scheduler,
-        progress=show,
-        backend=backend,
-        on_study=echo,
-    )
+    with tests_beside(comparing=True):  # scipy.stats imported beside the first simulations
+        done = run_all(
+            studies,
+            out_dir=out_dir,
+            seeds=seeds,
+            quick=quick,
+            workers=workers,
+            scheduler=scheduler,
+            progress=show,
+            backend=backend,
+            on_study=echo,
+        )
     for line in console_lines(done.robustness):
         click.echo(line)
     for path in done.summary_files:
