@@ -13,7 +13,8 @@ Run: ``.venv/bin/python benchmarks/bench_reproduce.py [--repeat K] [--out FILE.j
   writing chunks, loading logs, exporting them) and ``rest`` (the whole command's time less
   those: start-up, imports, progress files, tables, the HTML page). CPU time likewise
   (``time.process_time``: all threads; it moves less than wall time on a shared machine),
-  and the figure workers' CPU time apart (``workers``).
+  and the CPU time of its other processes apart (``workers``: the figure workers, and the
+  process forked to import scipy.stats and run the Mann-Whitney tests).
 
 Medians go to ``benchmarks/results/`` (``_results.py``). The target of issue 34: a full
 reproduction under 10 s warm on two cores, dominated by simulation
@@ -132,7 +133,7 @@ def child(out: str, times: str) -> None:
     except SystemExit as done:
         if done.code:
             raise
-    workers = resource.getrusage(resource.RUSAGE_CHILDREN)  # the figure workers, ended by now
+    workers = resource.getrusage(resource.RUSAGE_CHILDREN)  # the other processes, ended by now
     seconds = {**split.seconds, "workers_cpu": workers.ru_utime + workers.ru_stime}
     Path(times).write_text(json.dumps(seconds), encoding="utf-8")
 
@@ -190,7 +191,7 @@ def main() -> None:
     record.summary["cpu_s"] = medians["cpu"]
     record.summary["workers_cpu_s"] = medians["workers_cpu"]
     record.summary["simulation_share"] = medians["simulation"] / medians["wall"]
-    print(f"{'workers':<11} {'':>8} {'':>6} {medians['workers_cpu']:6.2f} s (drawing figures)")
+    print(f"{'workers':<11} {'':>8} {'':>6} {medians['workers_cpu']:6.2f} s (figures, tests)")
     print(f"{'whole':<11} {medians['wall']:6.2f} s {'':>6} {medians['cpu']:6.2f} s (target: 10 s)")
     record.save()
 

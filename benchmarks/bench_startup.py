@@ -9,7 +9,9 @@ Run: ``.venv/bin/python benchmarks/bench_startup.py [--repeat K] [--before REV] 
 - With ``--before REV``, ``import swarmtag`` and ``swarmtag --help`` also from the sources
   of git revision REV (``git archive``), side by side.
 - Once per command, ``python -X importtime``: the modules it imports first-hand, the
-  costliest first, with their cumulative microseconds (the table of docs/performance.md).
+  costliest first, with their cumulative microseconds (the table of docs/performance.md);
+  apart, those imported by the processes it forks (``swarmtag._beside``: scipy.stats for
+  the Mann-Whitney tests), whose lines go to a file of their own.
 
 Medians of wall time go to ``benchmarks/results/`` (``_results.py``). The target:
 ``swarmtag --help`` within 3x ``import numpy`` (``summary.help_over_numpy``).
@@ -51,17 +53,38 @@ def wall(argv: list[str], env: dict[str, str] | None = None) -> float:
     return time.perf_counter() - start
 
 
-def first_hand(argv: list[str]) -> list[tuple[str, int]]:
-    """The modules ``argv`` imports directly (not through another), by cumulative microseconds."""
-    done = subprocess.run(
-        [argv[0], "-X", "importtime", *argv[1:]],
-        check=True,
-        capture_output=True,
-        text=True,
-        cwd=tempfile.gettempdir(),
-    )
+FORKED_STDERR = """
+import os
+def _apart(path={path!r}):
+    os.dup2(os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND), 2)
+os.register_at_fork(after_in_child=_apart)
+"""
+"""Put before a ``-c`` command: the processes it forks write their stderr to ``path``."""
+
+
+def first_hand(argv: list[str]) -> tuple[list[tuple[str, int]], list[tuple[str, int]]]:
+    """The modules ``argv`` imports directly (not through another), by cumulative microseconds;
+    then those its forked processes import directly (``-c`` commands only, else none)."""
+    with tempfile.TemporaryDirectory() as scratch:
+        forked = Path(scratch) / "forked.txt"
+        forked.touch()
+        command = list(argv)
+        if command[1] == "-c":
+            command[2] = FORKED_STDERR.format(path=str(forked)) + command[2]
+        done = subprocess.run(
+            [command[0], "-X", "importtime", *command[1:]],
+            check=True,
+            capture_output=True,
+            text=True,
+            cwd=tempfile.gettempdir(),
+        )
+        return _depth_zero(done.stderr), _depth_zero(forked.read_text())
+
+
+def _depth_zero(stderr: str) -> list[tuple[str, int]]:
+    """The depth-0 modules of ``-X importtime`` lines, the costliest first."""
     found: list[tuple[str, int]] = []
-    for line in done.stderr.splitlines():
+    for line in stderr.splitlines():
         parts = line.split("|")
         if not line.startswith("import time:") or len(parts) != 3 or not parts[1].strip().isdigit():
             continue
@@ -103,16 +126,22 @@ def main() -> None:
                 times[name].append(wall(argv, env))
     medians = {name: statistics.median(values) for name, values in times.items()}
     for name, argv in COMMANDS.items():
-        imports = first_hand(argv)
+        imports, beside = first_hand(argv)
         record.row(
             command=name,
             seconds=medians[name],
             imports=[
                 {"module": module, "microseconds": micros} for module, micros in imports[:TOP]
             ],
+            imports_beside=[
+                {"module": module, "microseconds": micros} for module, micros in beside[:TOP]
+            ],
         )
         listed = ", ".join(f"{module} {micros / 1e3:.0f} ms" for module, micros in imports[:5])
         print(f"{name:<28} {medians[name]:6.3f} s   {listed}")
+        if beside:
+            listed = ", ".join(f"{module} {micros / 1e3:.0f} ms" for module, micros in beside[:3])
+            print(f"{'':<28} {'':>8}     in processes it forked: {listed}")
     for name, seconds in medians.items():
         if "@" in name:
             record.row(command=name, seconds=seconds)
