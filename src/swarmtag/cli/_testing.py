@@ -15,7 +15,6 @@ import importlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-from swarmtag._beside import beside
 from swarmtag.analysis.compare import Samples, mann_whitney_by, mann_whitney_ps
 
 __all__ = ["tests_beside"]
@@ -36,7 +35,12 @@ class _Tester:
 @contextmanager
 def tests_beside(comparing: bool) -> Iterator[None]:
     """Within this block, Mann-Whitney tests run in a forked process (if ``comparing``)."""
-    with beside(_Tester() if comparing else None) as children:
+    if not comparing:
+        yield
+        return
+    from swarmtag._beside import beside  # noqa: PLC0415 - multiprocessing: 15 ms, when forking
+
+    with beside(_Tester()) as children:
         if not children:
             yield
             return

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import sys
 import tempfile
@@ -222,18 +221,18 @@ def metrics(
             plan.file(option, path, suffixes=suffixes)
     if figures is not None:
         plan.folder("--figures", figures)
-    with contextlib.ExitStack() as stack:
-        # forked before the log is read: scipy.stats is imported beside it (not used for one
-        # condition: then the process is ended)
-        stack.enter_context(tests_beside(comparing=True))
-        log = trim_warmup(read_event_log(events), start)
-        table = read_event_table(event_table) if event_table is not None else None
-        check_bootstrap_memory(resamples, len(log), len(log.conditions))
-        status = Console(stderr=True).status(
-            f"bootstrapping {resamples} resamples of {len(log.conditions)} condition(s)"
-        )
-        stage = stack.enter_context(plan.writing())
-        stack.enter_context(status if sys.stderr.isatty() else nullcontext())
+    log = trim_warmup(read_event_log(events), start)
+    table = read_event_table(event_table) if event_table is not None else None
+    check_bootstrap_memory(resamples, len(log), len(log.conditions))
+    status = Console(stderr=True).status(
+        f"bootstrapping {resamples} resamples of {len(log.conditions)} condition(s)"
+    )
+    # forked before the statistics load their compiled loops: scipy.stats is imported beside
+    with (
+        tests_beside(comparing=len(log.conditions) > 1),
+        plan.writing() as stage,
+        status if sys.stderr.isatty() else nullcontext(),
+    ):
         report, choices = summarize_with_choices(
             log, table, baseline=baseline, resamples=resamples, seed=seed
         )
