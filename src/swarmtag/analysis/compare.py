@@ -48,6 +48,7 @@ from swarmtag.errors import StatisticsError
 __all__ = [
     "MIN_RUNS",
     "Comparison",
+    "Samples",
     "bootstrap_p_value",
     "compare",
     "compare_all",
@@ -139,8 +140,9 @@ _TESTER: ContextVar[Callable[[Samples], list[float | None]] | None] = ContextVar
 def mann_whitney_by(tester: Callable[[Samples], list[float | None]]) -> Iterator[None]:
     """Within this block, ``tester`` computes the Mann-Whitney p-values: ``mann_whitney_ps``.
 
-    ``simulate`` hands them to a process that imported scipy.stats while the
+    The CLI hands them to a process that imported scipy.stats while the
     command started (``swarmtag.cli._testing``); the numbers are the same.
+    The tester is this context's: threads started inside compute their own.
     """
     token = _TESTER.set(tester)
     try:

@@ -2,8 +2,8 @@
 
 Importing scipy.stats takes about half a second, longer than the rest of
 the statistics of a usual ``simulate``. Forked before the command loads its
-kernel (one core busy, the other idle), the process imports it beside the
-command; when the command's statistics come to the tests, it sends the
+compiled code (one core busy, the other idle), the process imports it
+beside the command; when the command's statistics come to the tests, it sends the
 samples there and gets the p-values back: scipy's own arithmetic, the same
 bits. Where no process can be forked (``swarmtag._beside.can_fork``), the
 command imports scipy.stats itself, as before.
