@@ -7,11 +7,17 @@ beside the command; when the command's statistics come to the tests, it sends th
 samples there and gets the p-values back: scipy's own arithmetic, the same
 bits. Where no process can be forked (``swarmtag._beside.can_fork``), the
 command imports scipy.stats itself, as before.
+
+Once per process: one that runs command after command (the tests, a script
+calling ``swarmtag.cli.main``) would otherwise import scipy.stats afresh in
+a new child for each, and wait for it; from its second command on (or once
+scipy.stats is imported) it tests in process, importing scipy.stats once.
 """
 
 from __future__ import annotations
 
 import importlib
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -32,12 +38,20 @@ class _Tester:
         return mann_whitney_ps(item)
 
 
+_STATE = {"forked": False}
+"""Whether this process has forked a tester yet (module docstring: once per process)."""
+
+
 @contextmanager
 def tests_beside(comparing: bool) -> Iterator[None]:
-    """Within this block, Mann-Whitney tests run in a forked process (if ``comparing``)."""
-    if not comparing:
+    """Within this block, Mann-Whitney tests run in a forked process (if ``comparing``).
+
+    Not where scipy.stats is imported already, nor after a first such block in this process.
+    """
+    if not comparing or _STATE["forked"] or "scipy.stats" in sys.modules:
         yield
         return
+    _STATE["forked"] = True
     from swarmtag._beside import beside  # noqa: PLC0415 - multiprocessing: 15 ms, when forking
 
     with beside(_Tester()) as children:
