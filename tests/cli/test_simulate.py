@@ -406,7 +406,10 @@ def test_a_drawing_process_killed_mid_way_fails_the_command_and_writes_nothing(
 ):
     from swarmtag.sim.outputs import render
 
+    test_process = os.getpid()  # drawn here instead, the stand-in would kill the test worker
+
     def killed(*args, **kwargs):
+        assert os.getpid() != test_process, "drawn in the test's own process"
         os.kill(os.getpid(), signal.SIGKILL)  # in the drawing process: out of memory, say
 
     monkeypatch.setattr(render, "animate", killed)
