@@ -29,6 +29,7 @@ import json
 import math
 import os
 import platform
+import resource
 import subprocess
 import sys
 import time
@@ -101,6 +102,12 @@ def machine() -> dict[str, Any]:
         "threads": os.environ.get("SWARMTAG_THREADS"),
         "load_average": load,
     }
+
+
+def children_cpu_s() -> float:
+    """User and system seconds of this process's waited-for child processes so far."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def probe_seconds() -> float:

@@ -22,7 +22,6 @@ import argparse
 import ctypes
 import os
 import re
-import resource
 import shutil
 import subprocess
 import sys
@@ -30,7 +29,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _results import ROOT, begin
+from _results import ROOT, begin, children_cpu_s
 
 PYTEST_TIME = re.compile(r"=+ .*? in ([0-9.]+)s")
 SLOW_LINE = re.compile(r"^([0-9.]+)s (call|setup|teardown) +(\S+)$")
@@ -53,12 +52,6 @@ def adopt_orphans() -> bool:
         return False
     libc = ctypes.CDLL(None, use_errno=True)
     return bool(libc.prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0)
-
-
-def children_cpu_s() -> float:
-    """User and system seconds of the reaped descendants so far."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
 
 
 def reap_all() -> None:

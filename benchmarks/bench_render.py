@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import resource
 import statistics
 import subprocess
 import sys
@@ -30,7 +29,7 @@ from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
-from _results import ROOT, begin
+from _results import ROOT, begin, children_cpu_s
 
 from swarmtag.policy import Urgency
 from swarmtag.sim import Scenario, simulate
@@ -51,17 +50,11 @@ main()
 """Runs ``swarmtag`` with the renderer file named first on its command line."""
 
 
-def children_cpu() -> float:
-    """CPU seconds (user + system) of the finished child processes so far."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
-
-
 def timed(argv: list[str]) -> tuple[float, float]:
     """Wall and CPU seconds of one whole command (a fresh process)."""
-    cpu, start = children_cpu(), time.perf_counter()
+    cpu, start = children_cpu_s(), time.perf_counter()
     subprocess.run(argv, check=True, capture_output=True)
-    return time.perf_counter() - start, children_cpu() - cpu
+    return time.perf_counter() - start, children_cpu_s() - cpu
 
 
 def timed_call(call: Callable[[], object]) -> tuple[float, float]:

@@ -27,7 +27,6 @@ import argparse
 import functools
 import importlib
 import json
-import resource
 import statistics
 import subprocess
 import sys
@@ -37,7 +36,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from _results import begin
+from _results import begin, children_cpu_s
 
 CHILD = "--child"
 """First argument of the timed command: run reproduce in this process, write the split."""
@@ -133,25 +132,19 @@ def child(out: str, times: str) -> None:
     except SystemExit as done:
         if done.code:
             raise
-    workers = resource.getrusage(resource.RUSAGE_CHILDREN)  # the other processes, ended by now
-    seconds = {**split.seconds, "workers_cpu": workers.ru_utime + workers.ru_stime}
+    # the other processes' CPU time: ended by now
+    seconds = {**split.seconds, "workers_cpu": children_cpu_s()}
     Path(times).write_text(json.dumps(seconds), encoding="utf-8")
-
-
-def children_cpu() -> float:
-    """CPU seconds (user + system) of the finished child processes so far."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
 
 
 def timed_run(scratch: Path, index: int) -> dict[str, float]:
     """One whole command in a fresh process: its wall and CPU time and the split of both."""
     out, times = scratch / f"run{index}", scratch / f"run{index}.json"
-    cpu, start = children_cpu(), time.perf_counter()
+    cpu, start = children_cpu_s(), time.perf_counter()
     subprocess.run(
         [sys.executable, __file__, CHILD, str(out), str(times)], check=True, capture_output=True
     )
-    wall, cpu = time.perf_counter() - start, children_cpu() - cpu
+    wall, cpu = time.perf_counter() - start, children_cpu_s() - cpu
     seconds: dict[str, float] = json.loads(times.read_text(encoding="utf-8"))
     parts = [seconds[part] for part in PARTS]
     parts_cpu = [seconds[f"{part}_cpu"] for part in PARTS]

@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -27,17 +26,11 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from _results import ROOT, begin
+from _results import ROOT, begin, children_cpu_s
 
 HERE = Path(__file__).resolve().parent
 TOP = 15
 """Modules printed (all are recorded)."""
-
-
-def children_cpu_s() -> float:
-    """User and system seconds of the waited-for child processes so far."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
 
 
 def run_suite(workers: int, paths: list[str], folder: Path) -> tuple[float, float, int]:
