@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import multiprocessing
 import os
 import signal
 import subprocess
@@ -118,6 +120,47 @@ def test_leaving_early_ends_the_child_at_once(tmp_path, monkeypatch):
     assert not process.is_alive()
     assert process.exitcode == 128 + signal.SIGTERM  # unwound, its own children ended
     assert time.monotonic() - began < 30
+
+
+class _Swallowing(Squares):
+    """Its SIGTERM is swallowed while it prepares, as an import in a C extension can swallow it."""
+
+    def prepare(self) -> None:
+        Path(os.environ["BESIDE_READY"]).touch()
+        with contextlib.suppress(SystemExit):
+            time.sleep(60)
+
+
+def test_a_child_that_lost_its_sigterm_ends_at_its_next_read(tmp_path, monkeypatch):
+    monkeypatch.setenv("BESIDE_READY", str(tmp_path / "ready"))
+    with beside(_Swallowing()) as (child,):
+        while not (tmp_path / "ready").exists():
+            time.sleep(0.01)
+        process = child._process
+    assert not process.is_alive()
+    assert process.exitcode != -signal.SIGKILL  # not killed after waiting _END_S for it
+
+
+class _HeldBackCtrlC:
+    """``deferred`` with a Ctrl-C that arrived during the fork: raised as the section ends."""
+
+    def __enter__(self) -> None:
+        pass
+
+    def __exit__(self, kind: object, *rest: object) -> None:
+        if kind is None:
+            raise KeyboardInterrupt
+
+
+def test_a_ctrl_c_held_back_over_the_fork_ends_the_child_it_started(monkeypatch):
+    before = set(multiprocessing.active_children())
+    monkeypatch.setattr(_beside, "deferred", _HeldBackCtrlC)
+    with pytest.raises(KeyboardInterrupt):
+        Beside.start(Squares())
+    left = set(multiprocessing.active_children()) - before
+    for process in left:  # a child left behind would block this process's exit
+        process.kill()
+    assert not left
 
 
 def test_with_another_thread_running_the_work_stays_here():

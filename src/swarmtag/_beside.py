@@ -153,20 +153,27 @@ class Beside:
         context = multiprocessing.get_context("fork")
         ours, theirs = context.Pipe()
         _CALLER_ENDS.add(ours)
-        process = context.Process(target=_child, args=(job, theirs))
+        child = cls(context.Process(target=_child, args=(job, theirs)), ours)
         for stream in (sys.stdout, sys.stderr):  # or the child flushes our buffered text again
             stream.flush()
-        with warnings.catch_warnings(), deferred():
-            # Python 3.12+ warns of native threads too (OpenBLAS's pool): those re-initialise
-            # at fork. The child starts deaf to Ctrl-C: the command ends it.
-            warnings.filterwarnings("ignore", "This process .* is multi-threaded", Warning)
-            mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-            try:
-                process.start()
-            finally:
-                signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        try:
+            with warnings.catch_warnings(), deferred():
+                # Python 3.12+ warns of native threads too (OpenBLAS's pool): those
+                # re-initialise at fork. The child starts deaf to Ctrl-C: the command ends it.
+                warnings.filterwarnings("ignore", "This process .* is multi-threaded", Warning)
+                mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+                try:
+                    child._process.start()
+                finally:
+                    signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        except BaseException:
+            # a Ctrl-C held back over the fork is raised here, the child running: nobody
+            # else holds it to end it (the command's exit would wait for it for good)
+            theirs.close()
+            child.close()
+            raise
         theirs.close()
-        return cls(process, ours)
+        return child
 
     def __enter__(self) -> Beside:
         """The running child."""
@@ -253,15 +260,24 @@ class Beside:
         return f"the process working beside the command ended before it was done ({how})"
 
     def close(self) -> None:
-        """Stop the child (if still running) and release it and the pipe."""
-        if self._process.is_alive():
+        """Stop the child (if still running) and release it and the pipe.
+
+        Our end of the pipe closes before the wait: a child whose SIGTERM was
+        swallowed (raised inside a C extension's import, which prints and drops
+        it) then ends at its next read instead of when it is killed.
+        """
+        started = self._process.pid is not None  # not when the fork itself failed
+        alive = started and self._process.is_alive()
+        if alive:
             self._process.terminate()  # SIGTERM: it ends its own children on the way out
+        _CALLER_ENDS.discard(self._pipe)
+        self._pipe.close()
+        if alive:
             self._process.join(_END_S)
             if self._process.is_alive():  # pragma: no cover - stuck where no signal is taken
                 self._process.kill()
-        self._process.join()
-        _CALLER_ENDS.discard(self._pipe)
-        self._pipe.close()
+        if started:
+            self._process.join()
 
 
 def _no_step(_what: str) -> None:
